@@ -1,0 +1,48 @@
+//! # carom
+//!
+//! A `no_std`, allocation-free, deterministic 3D rigid-body collision engine with a fixed
+//! time step.
+//!
+//! **The principle:** the same inputs give bit-identical results on every target, in
+//! bounded memory and bounded time, and no input makes it panic.
+//!
+//! The crate has two layers:
+//! - [`shape`] and [`collide`]: stateless geometry, pure functions of (shape, pose)
+//!   pairs: GJK distance, EPA penetration, clipped contact manifolds, time of impact, ray
+//!   casts.
+//! - the world (coming with the dynamics): bodies in fixed-capacity pools and one fixed
+//!   step.
+//!
+//! ```
+//! use carom::collide::contact;
+//! use carom::math::{Iso, Vec3};
+//! use carom::shape::Shape;
+//!
+//! # fn main() -> Result<(), carom::Error> {
+//! let ground = Shape::cuboid(Vec3::new(5.0, 0.5, 5.0))?;
+//! let crate_box = Shape::cuboid(Vec3::new(0.5, 0.5, 0.5))?;
+//! let ground_pose = Iso::from_position(Vec3::new(0.0, -0.5, 0.0));
+//! let box_pose = Iso::from_position(Vec3::new(0.0, 0.49, 0.0)); // 1 cm deep
+//! let m = contact(&ground, &ground_pose, &crate_box, &box_pose, 0.02)?.expect("touching");
+//! assert_eq!(m.points().len(), 4);
+//! # Ok(())
+//! # }
+//! ```
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+#![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
+
+#[cfg(test)]
+extern crate std;
+
+pub mod collide;
+pub mod error;
+pub mod math;
+pub mod props;
+pub mod rng;
+pub mod shape;
+
+pub use error::{Error, HullError, Input, Pool, SnapshotError};
+pub use math::{Aabb, Iso, Mat3, Quat, Vec3};
+pub use shape::{ConvexHull, Shape};

@@ -1,0 +1,191 @@
+use core::ops::{Add, Mul};
+
+use super::{scalar, Quat, Vec3};
+
+/// A 3×3 matrix stored as three columns. Used for rotations and inertia tensors
+/// (kg·m², or its inverse).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Mat3 {
+    /// First column.
+    pub x: Vec3,
+    /// Second column.
+    pub y: Vec3,
+    /// Third column.
+    pub z: Vec3,
+}
+
+impl Default for Mat3 {
+    fn default() -> Self {
+        Mat3::IDENTITY
+    }
+}
+
+impl Mat3 {
+    /// The identity matrix.
+    pub const IDENTITY: Mat3 = Mat3::from_cols(Vec3::X, Vec3::Y, Vec3::Z);
+    /// The zero matrix.
+    pub const ZERO: Mat3 = Mat3::from_cols(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+
+    /// A matrix from its columns.
+    #[inline]
+    pub const fn from_cols(x: Vec3, y: Vec3, z: Vec3) -> Mat3 {
+        Mat3 { x, y, z }
+    }
+
+    /// A diagonal matrix.
+    #[inline]
+    pub const fn from_diagonal(d: Vec3) -> Mat3 {
+        Mat3::from_cols(
+            Vec3::new(d.x, 0.0, 0.0),
+            Vec3::new(0.0, d.y, 0.0),
+            Vec3::new(0.0, 0.0, d.z),
+        )
+    }
+
+    /// The rotation matrix of a unit quaternion.
+    pub fn from_quat(q: Quat) -> Mat3 {
+        Mat3::from_cols(q.rotate(Vec3::X), q.rotate(Vec3::Y), q.rotate(Vec3::Z))
+    }
+
+    /// Row `i` (0, 1, anything else → 2).
+    #[inline]
+    pub fn row(&self, i: usize) -> Vec3 {
+        Vec3::new(self.x[i], self.y[i], self.z[i])
+    }
+
+    /// The diagonal.
+    #[inline]
+    pub fn diagonal(&self) -> Vec3 {
+        Vec3::new(self.x.x, self.y.y, self.z.z)
+    }
+
+    /// Transpose.
+    #[inline]
+    pub fn transpose(&self) -> Mat3 {
+        Mat3::from_cols(self.row(0), self.row(1), self.row(2))
+    }
+
+    /// `M v`.
+    #[inline]
+    pub fn mul_vec(&self, v: Vec3) -> Vec3 {
+        self.x * v.x + self.y * v.y + self.z * v.z
+    }
+
+    /// `Mᵀ v`.
+    #[inline]
+    pub fn transpose_mul_vec(&self, v: Vec3) -> Vec3 {
+        Vec3::new(self.x.dot(v), self.y.dot(v), self.z.dot(v))
+    }
+
+    /// `M s`, every entry scaled.
+    #[inline]
+    pub fn scale(&self, s: f32) -> Mat3 {
+        Mat3::from_cols(self.x * s, self.y * s, self.z * s)
+    }
+
+    /// Determinant.
+    #[inline]
+    pub fn determinant(&self) -> f32 {
+        self.x.dot(self.y.cross(self.z))
+    }
+
+    /// Inverse, or `None` when the determinant is zero or not finite.
+    pub fn inverse(&self) -> Option<Mat3> {
+        let det = self.determinant();
+        if det == 0.0 || !det.is_finite() {
+            return None;
+        }
+        let inv_det = 1.0 / det;
+        // Rows of the inverse are the cross products of column pairs.
+        let r0 = self.y.cross(self.z) * inv_det;
+        let r1 = self.z.cross(self.x) * inv_det;
+        let r2 = self.x.cross(self.y) * inv_det;
+        let m = Mat3::from_cols(r0, r1, r2).transpose();
+        if m.is_finite() {
+            Some(m)
+        } else {
+            None
+        }
+    }
+
+    /// `R M Rᵀ` for a rotation `R`: a body-frame inertia (or inverse inertia) tensor seen
+    /// in the world frame.
+    pub fn rotated(&self, r: &Mat3) -> Mat3 {
+        *r * *self * r.transpose()
+    }
+
+    /// True when every entry is finite.
+    pub fn is_finite(&self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.z.is_finite()
+    }
+
+    /// Outer product `a bᵀ`.
+    #[inline]
+    pub fn outer(a: Vec3, b: Vec3) -> Mat3 {
+        Mat3::from_cols(a * b.x, a * b.y, a * b.z)
+    }
+
+    /// Largest absolute entry.
+    pub fn max_abs(&self) -> f32 {
+        scalar::max(
+            self.x.abs().max_elem(),
+            scalar::max(self.y.abs().max_elem(), self.z.abs().max_elem()),
+        )
+    }
+}
+
+impl Mul for Mat3 {
+    type Output = Mat3;
+    #[inline]
+    fn mul(self, o: Mat3) -> Mat3 {
+        Mat3::from_cols(self.mul_vec(o.x), self.mul_vec(o.y), self.mul_vec(o.z))
+    }
+}
+
+impl Add for Mat3 {
+    type Output = Mat3;
+    #[inline]
+    fn add(self, o: Mat3) -> Mat3 {
+        Mat3::from_cols(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+
+impl Mul<Vec3> for Mat3 {
+    type Output = Vec3;
+    #[inline]
+    fn mul(self, v: Vec3) -> Vec3 {
+        self.mul_vec(v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let m = Mat3::from_cols(
+            Vec3::new(2.0, 0.5, 0.1),
+            Vec3::new(0.3, 3.0, -0.2),
+            Vec3::new(0.0, 0.4, 1.5),
+        );
+        let p = m * m.inverse().unwrap();
+        for (a, b) in [(p.x, Vec3::X), (p.y, Vec3::Y), (p.z, Vec3::Z)] {
+            assert!((a - b).length() < 1e-6);
+        }
+        assert!(Mat3::ZERO.inverse().is_none());
+    }
+
+    #[test]
+    fn rotated_diagonal_keeps_trace() {
+        let i = Mat3::from_diagonal(Vec3::new(1.0, 2.0, 3.0));
+        let r = Mat3::from_quat(Quat::from_axis_angle(Vec3::new(1.0, 1.0, 0.0), 0.8));
+        let w = i.rotated(&r);
+        let tr = w.x.x + w.y.y + w.z.z;
+        assert!((tr - 6.0).abs() < 1e-5);
+        // Symmetric.
+        assert!((w.x.y - w.y.x).abs() < 1e-6);
+    }
+}

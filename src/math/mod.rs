@@ -1,0 +1,19 @@
+//! Small, deterministic 3D math: [`Vec3`], [`Quat`], [`Mat3`], [`Iso`] and [`Aabb`].
+//!
+//! This is the only module that calls `libm` (or, with the feature `micromath`, its fast
+//! approximations): everything else reaches square roots and trigonometry through
+//! [`scalar`]. The simulation step itself uses only `+ − × ÷ √`, comparisons and selects,
+//! so it gives the same bits on every target. No `mul_add`, no SIMD, no intrinsics.
+
+mod aabb;
+mod iso;
+mod mat3;
+mod quat;
+pub mod scalar;
+mod vec3;
+
+pub use aabb::Aabb;
+pub use iso::Iso;
+pub use mat3::Mat3;
+pub use quat::Quat;
+pub use vec3::Vec3;

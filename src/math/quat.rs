@@ -1,0 +1,182 @@
+use core::ops::Mul;
+
+use super::{scalar, Vec3};
+
+/// A rotation quaternion `w + xi + yj + zk`. Unit length when used as a rotation.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Quat {
+    /// i component.
+    pub x: f32,
+    /// j component.
+    pub y: f32,
+    /// k component.
+    pub z: f32,
+    /// Real component.
+    pub w: f32,
+}
+
+impl Default for Quat {
+    fn default() -> Self {
+        Quat::IDENTITY
+    }
+}
+
+/// How far `|q|²` may be from 1 for a quaternion given at the API to count as a rotation.
+pub(crate) const UNIT_TOLERANCE: f32 = 1.0e-3;
+
+impl Quat {
+    /// The identity rotation.
+    pub const IDENTITY: Quat = Quat::from_xyzw(0.0, 0.0, 0.0, 1.0);
+
+    /// A quaternion from its components (not normalised).
+    #[inline]
+    pub const fn from_xyzw(x: f32, y: f32, z: f32, w: f32) -> Quat {
+        Quat { x, y, z, w }
+    }
+
+    /// Rotation of `angle` radians about the unit vector `axis` (right-handed).
+    /// Uses sine and cosine: an API helper, never called inside the step.
+    pub fn from_axis_angle(axis: Vec3, angle: f32) -> Quat {
+        let a = axis.normalize_or(Vec3::Y);
+        let h = 0.5 * angle;
+        let s = scalar::sin(h);
+        Quat::from_xyzw(a.x * s, a.y * s, a.z * s, scalar::cos(h))
+    }
+
+    /// The vector part `(x, y, z)`.
+    #[inline]
+    pub fn xyz(self) -> Vec3 {
+        Vec3::new(self.x, self.y, self.z)
+    }
+
+    /// Squared norm.
+    #[inline]
+    pub fn length_squared(self) -> f32 {
+        self.x * self.x + self.y * self.y + self.z * self.z + self.w * self.w
+    }
+
+    /// The unit quaternion along `self`, or the identity when `self` is (nearly) zero or
+    /// not finite.
+    #[inline]
+    pub fn normalize(self) -> Quat {
+        let l2 = self.length_squared();
+        if l2 > 1.0e-20 && l2.is_finite() {
+            let inv = 1.0 / scalar::sqrt(l2);
+            Quat::from_xyzw(self.x * inv, self.y * inv, self.z * inv, self.w * inv)
+        } else {
+            Quat::IDENTITY
+        }
+    }
+
+    /// True when all components are finite and `| |q|² − 1 |` is within a small tolerance.
+    pub fn is_unit(self) -> bool {
+        let l2 = self.length_squared();
+        l2.is_finite() && scalar::abs(l2 - 1.0) <= UNIT_TOLERANCE
+    }
+
+    /// True when every component is finite.
+    pub fn is_finite(self) -> bool {
+        self.x.is_finite() && self.y.is_finite() && self.z.is_finite() && self.w.is_finite()
+    }
+
+    /// Conjugate, the inverse of a unit quaternion.
+    #[inline]
+    pub fn conjugate(self) -> Quat {
+        Quat::from_xyzw(-self.x, -self.y, -self.z, self.w)
+    }
+
+    /// Rotate `v`: `q v q*`, computed as `v + 2w (u × v) + 2 u × (u × v)` with `u` the
+    /// vector part.
+    #[inline]
+    pub fn rotate(self, v: Vec3) -> Vec3 {
+        let u = self.xyz();
+        let t = u.cross(v) * 2.0;
+        v + t * self.w + u.cross(t)
+    }
+
+    /// Rotate `v` by the inverse rotation.
+    #[inline]
+    pub fn inverse_rotate(self, v: Vec3) -> Vec3 {
+        self.conjugate().rotate(v)
+    }
+
+    /// Integrate an angular velocity `omega` (rad/s, world frame) over `dt` seconds:
+    /// `q' = normalise(q + ½ dt (ω, 0) q)`. Uses no trigonometry.
+    #[inline]
+    pub fn integrate(self, omega: Vec3, dt: f32) -> Quat {
+        let h = 0.5 * dt;
+        let w = Quat::from_xyzw(omega.x * h, omega.y * h, omega.z * h, 0.0);
+        let dq = w * self;
+        Quat::from_xyzw(
+            self.x + dq.x,
+            self.y + dq.y,
+            self.z + dq.z,
+            self.w + dq.w,
+        )
+        .normalize()
+    }
+
+    /// `-0.0` components replaced by `+0.0` (for hashing and snapshots).
+    #[inline]
+    pub fn canonical(self) -> Quat {
+        Quat::from_xyzw(
+            scalar::canonical(self.x),
+            scalar::canonical(self.y),
+            scalar::canonical(self.z),
+            scalar::canonical(self.w),
+        )
+    }
+}
+
+impl Mul for Quat {
+    type Output = Quat;
+    /// Hamilton product: `(a * b).rotate(v) == a.rotate(b.rotate(v))`.
+    #[inline]
+    fn mul(self, b: Quat) -> Quat {
+        let a = self;
+        Quat::from_xyzw(
+            a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
+            a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+            a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w,
+            a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: Vec3, b: Vec3) -> bool {
+        (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn quarter_turn_about_y_maps_x_to_minus_z() {
+        let q = Quat::from_axis_angle(Vec3::Y, core::f32::consts::FRAC_PI_2);
+        assert!(close(q.rotate(Vec3::X), -Vec3::Z));
+        assert!(close(q.inverse_rotate(-Vec3::Z), Vec3::X));
+    }
+
+    #[test]
+    fn product_composes_rotations() {
+        let a = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0), 0.7);
+        let b = Quat::from_axis_angle(Vec3::new(-1.0, 0.5, 0.2), 1.9);
+        let v = Vec3::new(0.3, -2.0, 1.1);
+        assert!(close((a * b).rotate(v), a.rotate(b.rotate(v))));
+    }
+
+    #[test]
+    fn integration_matches_axis_angle_for_small_steps() {
+        let omega = Vec3::new(0.0, 0.0, 2.0);
+        let mut q = Quat::IDENTITY;
+        for _ in 0..1000 {
+            q = q.integrate(omega, 0.001);
+        }
+        let exact = Quat::from_axis_angle(Vec3::Z, 2.0);
+        assert!(close(q.rotate(Vec3::X), exact.rotate(Vec3::X)));
+    }
+}

@@ -1,0 +1,413 @@
+//! Convex shapes, one file each: support points, supporting faces with feature ids,
+//! bounds under a pose, mass properties and ray casts, all in the shape's local frame.
+//!
+//! Every shape is a *core* (a point, a segment, a box, a hull, a triangle) inflated by a
+//! *radius* (zero for polytopes): a sphere is a point core with a radius, a capsule a
+//! segment core. GJK runs on the cores and adds the radii; supporting faces are faces of
+//! the core.
+
+mod capsule;
+mod cuboid;
+mod hull;
+mod plane;
+mod sphere;
+mod triangle;
+
+pub use capsule::Capsule;
+pub use cuboid::Cuboid;
+pub use hull::{ConvexHull, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES};
+pub use plane::HalfSpace;
+pub use sphere::Sphere;
+pub use triangle::Triangle;
+
+use crate::error::{finite_vec, Error, Input};
+use crate::math::{Aabb, Iso, Mat3, Vec3};
+
+/// Most vertices a supporting face may have.
+pub const MAX_FACE_VERTICES: usize = 16;
+
+/// Half-size (m) of the bounding box reported for an unbounded half-space.
+pub const HALF_SPACE_EXTENT: f32 = 1.0e5;
+
+/// What kind of feature a [`FeatureId`] names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FeatureKind {
+    /// A vertex of the core.
+    Vertex,
+    /// An edge of the core.
+    Edge,
+    /// A face of the core.
+    Face,
+}
+
+/// A vertex, edge or face of a shape's core, stable for as long as the shape exists.
+/// Packed in a `u32`: the kind in bits 30–31, the index in bits 0–15.
+/// Edges are named by their two vertex indices: `min · 256 + max`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FeatureId(pub u32);
+
+impl FeatureId {
+    /// Vertex `i`.
+    #[inline]
+    pub const fn vertex(i: u32) -> FeatureId {
+        FeatureId(i & 0xffff)
+    }
+
+    /// The edge between vertices `a` and `b` (order does not matter).
+    #[inline]
+    pub const fn edge(a: u32, b: u32) -> FeatureId {
+        let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+        FeatureId((1 << 30) | ((lo & 0xff) << 8) | (hi & 0xff))
+    }
+
+    /// Face `i`.
+    #[inline]
+    pub const fn face(i: u32) -> FeatureId {
+        FeatureId((2 << 30) | (i & 0xffff))
+    }
+
+    /// The kind of feature.
+    #[inline]
+    pub const fn kind(self) -> FeatureKind {
+        match self.0 >> 30 {
+            0 => FeatureKind::Vertex,
+            1 => FeatureKind::Edge,
+            _ => FeatureKind::Face,
+        }
+    }
+
+    /// The index within its kind.
+    #[inline]
+    pub const fn index(self) -> u32 {
+        self.0 & 0xffff
+    }
+}
+
+/// A supporting face of a core: a convex polygon in the shape's local frame, vertices in
+/// counter-clockwise order seen from outside (right-handed about `normal`). One vertex
+/// means a point, two a segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Face {
+    /// Outward unit normal (local frame). For a point or segment: the query direction.
+    pub normal: Vec3,
+    /// The face's own id (a face, edge or vertex feature).
+    pub id: FeatureId,
+    /// Number of vertices used, 1 to [`MAX_FACE_VERTICES`].
+    pub len: u8,
+    /// Vertices (local frame, m).
+    pub vertices: [Vec3; MAX_FACE_VERTICES],
+    /// Feature id of each vertex.
+    pub vertex_ids: [FeatureId; MAX_FACE_VERTICES],
+    /// Feature id of the edge from vertex `i` to vertex `i + 1` (wrapping).
+    pub edge_ids: [FeatureId; MAX_FACE_VERTICES],
+}
+
+impl Face {
+    /// An empty face with the given normal and id; fill it with [`Face::push`].
+    pub const fn new(normal: Vec3, id: FeatureId) -> Face {
+        Face {
+            normal,
+            id,
+            len: 0,
+            vertices: [Vec3::ZERO; MAX_FACE_VERTICES],
+            vertex_ids: [FeatureId(0); MAX_FACE_VERTICES],
+            edge_ids: [FeatureId(0); MAX_FACE_VERTICES],
+        }
+    }
+
+    /// Append a vertex and the id of the edge that leaves it; ignored when full.
+    pub fn push(&mut self, v: Vec3, vertex_id: FeatureId, edge_id: FeatureId) {
+        let i = self.len as usize;
+        if i < MAX_FACE_VERTICES {
+            self.vertices[i] = v;
+            self.vertex_ids[i] = vertex_id;
+            self.edge_ids[i] = edge_id;
+            self.len += 1;
+        }
+    }
+
+    /// The vertices in use.
+    pub fn points(&self) -> &[Vec3] {
+        &self.vertices[..self.len as usize]
+    }
+
+    /// The face moved into another frame by `iso`.
+    pub fn transformed(&self, iso: &Iso) -> Face {
+        let mut f = *self;
+        f.normal = iso.transform_vector(self.normal);
+        for v in f.vertices[..f.len as usize].iter_mut() {
+            *v = iso.transform_point(*v);
+        }
+        f
+    }
+}
+
+/// Mass, centre of mass and inertia of a shape of uniform density.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct MassProperties {
+    /// Mass (kg).
+    pub mass: f32,
+    /// Centre of mass in the shape's local frame (m).
+    pub center: Vec3,
+    /// Inertia tensor about the centre of mass, in the local frame's axes (kg·m²).
+    pub inertia: Mat3,
+}
+
+/// A ray: `origin + t · direction` for `t >= 0`, `direction` of unit length, `t` in metres.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+pub struct Ray {
+    /// Start point (m).
+    pub origin: Vec3,
+    /// Unit direction.
+    pub direction: Vec3,
+}
+
+impl Ray {
+    /// A ray from an origin and a direction; the direction is normalised. Fails on
+    /// non-finite input or a zero direction.
+    pub fn new(origin: Vec3, direction: Vec3) -> Result<Ray, Error> {
+        finite_vec(origin, Input::Position)?;
+        finite_vec(direction, Input::Direction)?;
+        let (d, _) = direction
+            .normalize_and_length()
+            .ok_or(Error::NotPositive(Input::Direction))?;
+        Ok(Ray {
+            origin,
+            direction: d,
+        })
+    }
+
+    /// The point at distance `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.direction * t
+    }
+}
+
+/// Where a ray first meets a shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayHit {
+    /// Distance along the ray (m); 0 when the origin is inside the shape.
+    pub t: f32,
+    /// The hit point (same frame as the ray).
+    pub point: Vec3,
+    /// Outward unit surface normal at the hit (same frame as the ray); for an origin
+    /// inside the shape, the reversed ray direction.
+    pub normal: Vec3,
+}
+
+/// A convex collision shape. Hulls are borrowed, so a world full of the same hull keeps one
+/// copy of it (in a `static`, on the stack or in a `Box`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Shape<'a> {
+    /// A ball.
+    Sphere(Sphere),
+    /// A segment along local Y with a radius.
+    Capsule(Capsule),
+    /// A box.
+    Cuboid(Cuboid),
+    /// A convex polytope built from points.
+    Hull(&'a ConvexHull),
+    /// A half-space below a plane through the local origin (static bodies only).
+    HalfSpace(HalfSpace),
+    /// A single triangle (static bodies only; no volume).
+    Triangle(Triangle),
+}
+
+impl Shape<'static> {
+    /// A sphere of `radius` metres.
+    pub fn sphere(radius: f32) -> Result<Shape<'static>, Error> {
+        Ok(Shape::Sphere(Sphere::new(radius)?))
+    }
+
+    /// A capsule along local Y: a segment of length `2 half_height` inflated by `radius`.
+    pub fn capsule(half_height: f32, radius: f32) -> Result<Shape<'static>, Error> {
+        Ok(Shape::Capsule(Capsule::new(half_height, radius)?))
+    }
+
+    /// A box with the given half-extents (m).
+    pub fn cuboid(half_extents: Vec3) -> Result<Shape<'static>, Error> {
+        Ok(Shape::Cuboid(Cuboid::new(half_extents)?))
+    }
+
+    /// The half-space `{p : normal · p <= 0}` in local coordinates.
+    pub fn half_space(normal: Vec3) -> Result<Shape<'static>, Error> {
+        Ok(Shape::HalfSpace(HalfSpace::new(normal)?))
+    }
+
+    /// A triangle with vertices `a, b, c` (counter-clockwise about its normal).
+    pub fn triangle(a: Vec3, b: Vec3, c: Vec3) -> Result<Shape<'static>, Error> {
+        Ok(Shape::Triangle(Triangle::new(a, b, c)?))
+    }
+}
+
+impl<'a> Shape<'a> {
+    /// A shape from a built convex hull.
+    pub fn hull(hull: &'a ConvexHull) -> Shape<'a> {
+        Shape::Hull(hull)
+    }
+
+    /// True for shapes that only static bodies may use (half-space, triangle).
+    pub fn is_static_only(&self) -> bool {
+        matches!(self, Shape::HalfSpace(_) | Shape::Triangle(_))
+    }
+
+    /// The radius that inflates the core (m); zero for polytopes.
+    #[inline]
+    pub fn radius(&self) -> f32 {
+        match self {
+            Shape::Sphere(s) => s.radius,
+            Shape::Capsule(c) => c.radius,
+            _ => 0.0,
+        }
+    }
+
+    /// The core's furthest point along `dir` (local frame) and its vertex index.
+    /// A half-space has no support point; it answers with the origin.
+    #[inline]
+    pub fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
+        match self {
+            Shape::Sphere(_) => (Vec3::ZERO, 0),
+            Shape::Capsule(c) => c.core_support(dir),
+            Shape::Cuboid(b) => b.core_support(dir),
+            Shape::Hull(h) => h.core_support(dir),
+            Shape::HalfSpace(_) => (Vec3::ZERO, 0),
+            Shape::Triangle(t) => t.core_support(dir),
+        }
+    }
+
+    /// Core vertex `index` (local frame); out-of-range indices give vertex 0.
+    #[inline]
+    pub fn core_vertex(&self, index: u32) -> Vec3 {
+        match self {
+            Shape::Sphere(_) => Vec3::ZERO,
+            Shape::Capsule(c) => c.core_vertex(index),
+            Shape::Cuboid(b) => b.core_vertex(index),
+            Shape::Hull(h) => h.core_vertex(index),
+            Shape::HalfSpace(_) => Vec3::ZERO,
+            Shape::Triangle(t) => t.core_vertex(index),
+        }
+    }
+
+    /// The furthest surface point along `dir` (local frame): core support plus radius.
+    pub fn support(&self, dir: Vec3) -> Vec3 {
+        let (p, _) = self.core_support(dir);
+        let r = self.radius();
+        if r > 0.0 {
+            p + dir.normalize_or(Vec3::Y) * r
+        } else {
+            p
+        }
+    }
+
+    /// The face of the core that best supports `dir` (local frame): the face whose normal
+    /// is most aligned with `dir`, or an edge or vertex where the core has no such face.
+    pub fn supporting_face(&self, dir: Vec3) -> Face {
+        match self {
+            Shape::Sphere(_) => {
+                let mut f = Face::new(dir.normalize_or(Vec3::Y), FeatureId::vertex(0));
+                f.push(Vec3::ZERO, FeatureId::vertex(0), FeatureId::vertex(0));
+                f
+            }
+            Shape::Capsule(c) => c.supporting_face(dir),
+            Shape::Cuboid(b) => b.supporting_face(dir),
+            Shape::Hull(h) => h.supporting_face(dir),
+            Shape::HalfSpace(p) => p.supporting_face(dir),
+            Shape::Triangle(t) => t.supporting_face(dir),
+        }
+    }
+
+    /// Bounding box in the shape's local frame.
+    pub fn local_aabb(&self) -> Aabb {
+        self.aabb(&Iso::IDENTITY)
+    }
+
+    /// Bounding box under `pose` (world frame).
+    pub fn aabb(&self, pose: &Iso) -> Aabb {
+        match self {
+            Shape::Sphere(s) => Aabb::from_center_half(pose.position, Vec3::splat(s.radius)),
+            Shape::Capsule(c) => c.aabb(pose),
+            Shape::Cuboid(b) => Aabb::from_local_box(pose, b.half_extents),
+            Shape::Hull(h) => h.aabb(pose),
+            Shape::HalfSpace(p) => p.aabb(pose),
+            Shape::Triangle(t) => t.aabb(pose),
+        }
+    }
+
+    /// Largest distance from the local origin to any point of the shape (m); for a
+    /// half-space, [`HALF_SPACE_EXTENT`].
+    pub fn bounding_radius(&self) -> f32 {
+        match self {
+            Shape::Sphere(s) => s.radius,
+            Shape::Capsule(c) => c.half_height + c.radius,
+            Shape::Cuboid(b) => b.half_extents.length(),
+            Shape::Hull(h) => h.bounding_radius(),
+            Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
+            Shape::Triangle(t) => t.bounding_radius(),
+        }
+    }
+
+    /// Smallest extent: the thickness a fast body can tunnel through in one step (m).
+    /// For a triangle, zero.
+    pub fn min_extent(&self) -> f32 {
+        match self {
+            Shape::Sphere(s) => 2.0 * s.radius,
+            Shape::Capsule(c) => 2.0 * c.radius,
+            Shape::Cuboid(b) => 2.0 * b.half_extents.min_elem(),
+            Shape::Hull(h) => h.min_extent(),
+            Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
+            Shape::Triangle(_) => 0.0,
+        }
+    }
+
+    /// Mass properties for a uniform `density` (kg/m³). Fails for a non-positive or
+    /// non-finite density and for shapes without volume.
+    pub fn mass_properties(&self, density: f32) -> Result<MassProperties, Error> {
+        crate::error::positive(density, Input::Density)?;
+        match self {
+            Shape::Sphere(s) => Ok(s.mass_properties(density)),
+            Shape::Capsule(c) => Ok(c.mass_properties(density)),
+            Shape::Cuboid(b) => Ok(b.mass_properties(density)),
+            Shape::Hull(h) => Ok(h.mass_properties(density)),
+            Shape::HalfSpace(_) | Shape::Triangle(_) => Err(Error::NoVolume),
+        }
+    }
+
+    /// Cast a ray (world frame) against the shape under `pose`, up to `max_t` metres.
+    /// `Ok(None)` means no hit. Fails on a non-finite ray, pose or `max_t`, or a negative
+    /// `max_t`.
+    pub fn cast_ray(&self, pose: &Iso, ray: &Ray, max_t: f32) -> Result<Option<RayHit>, Error> {
+        crate::error::non_negative(max_t, Input::Distance)?;
+        finite_vec(ray.origin, Input::Position)?;
+        finite_vec(ray.direction, Input::Direction)?;
+        crate::collide::check_pose(pose)?;
+        Ok(self.cast_ray_unchecked(pose, ray, max_t))
+    }
+
+    /// [`Shape::cast_ray`] without input checks (inputs must be finite, the ray direction
+    /// unit length).
+    pub(crate) fn cast_ray_unchecked(&self, pose: &Iso, ray: &Ray, max_t: f32) -> Option<RayHit> {
+        let local = Ray {
+            origin: pose.inverse_transform_point(ray.origin),
+            direction: pose.inverse_transform_vector(ray.direction),
+        };
+        let hit = match self {
+            Shape::Sphere(s) => s.cast_ray(&local, max_t),
+            Shape::Capsule(c) => c.cast_ray(&local, max_t),
+            Shape::Cuboid(b) => b.cast_ray(&local, max_t),
+            Shape::Hull(h) => h.cast_ray(&local, max_t),
+            Shape::HalfSpace(p) => p.cast_ray(&local, max_t),
+            Shape::Triangle(t) => t.cast_ray(&local, max_t),
+        }?;
+        Some(RayHit {
+            t: hit.t,
+            point: pose.transform_point(hit.point),
+            normal: pose.transform_vector(hit.normal),
+        })
+    }
+}

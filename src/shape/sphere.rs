@@ -1,0 +1,70 @@
+//! Sphere: a point core inflated by a radius.
+
+use super::{MassProperties, Ray, RayHit};
+use crate::error::{positive, Error, Input};
+use crate::math::{scalar, Mat3, Vec3};
+
+/// A ball of `radius` metres centred on the local origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct Sphere {
+    /// Radius (m), finite and positive.
+    pub radius: f32,
+}
+
+impl Sphere {
+    /// A sphere; the radius must be finite and positive.
+    pub fn new(radius: f32) -> Result<Sphere, Error> {
+        Ok(Sphere {
+            radius: positive(radius, Input::Radius)?,
+        })
+    }
+
+    /// `m = 4/3 π r³ ρ`, `I = 2/5 m r²` on every axis.
+    pub fn mass_properties(&self, density: f32) -> MassProperties {
+        let r = self.radius;
+        let mass = density * (4.0 / 3.0) * core::f32::consts::PI * r * r * r;
+        let i = 0.4 * mass * r * r;
+        MassProperties {
+            mass,
+            center: Vec3::ZERO,
+            inertia: Mat3::from_diagonal(Vec3::splat(i)),
+        }
+    }
+
+    /// Ray cast in the local frame.
+    pub fn cast_ray(&self, ray: &Ray, max_t: f32) -> Option<RayHit> {
+        cast_ray_sphere(ray, Vec3::ZERO, self.radius, max_t)
+    }
+}
+
+/// Ray against a ball at `center`: the smaller root of `|o + t d − c|² = r²`.
+pub(crate) fn cast_ray_sphere(ray: &Ray, center: Vec3, radius: f32, max_t: f32) -> Option<RayHit> {
+    let m = ray.origin - center;
+    let c = m.length_squared() - radius * radius;
+    if c <= 0.0 {
+        return Some(RayHit {
+            t: 0.0,
+            point: ray.origin,
+            normal: -ray.direction,
+        });
+    }
+    let b = m.dot(ray.direction);
+    if b > 0.0 {
+        return None;
+    }
+    let disc = b * b - c;
+    if disc < 0.0 {
+        return None;
+    }
+    let t = scalar::max(-b - scalar::sqrt(disc), 0.0);
+    if t > max_t {
+        return None;
+    }
+    let point = ray.at(t);
+    Some(RayHit {
+        t,
+        point,
+        normal: (point - center).normalize_or(-ray.direction),
+    })
+}
