@@ -3,10 +3,12 @@
 //! returns `Err(Violation)` naming the first property that failed. None of them panics.
 
 mod hull;
+mod manifold;
 mod narrow;
 mod toi;
 
 pub use hull::*;
+pub use manifold::*;
 pub use narrow::*;
 pub use toi::*;
 

@@ -1,0 +1,1 @@
+//! Properties: contact manifolds.
