@@ -37,12 +37,20 @@
 extern crate std;
 
 pub mod collide;
+pub mod config;
+pub mod dynamics;
 pub mod error;
 pub mod math;
 pub mod props;
 pub mod rng;
 pub mod shape;
+mod world;
 
+pub use config::WorldConfig;
+pub use dynamics::body::{BodyDesc, BodyKind, Material, MassSpec};
+pub use dynamics::events::{Event, StepReport};
+pub use dynamics::BodyHandle;
 pub use error::{Error, HullError, Input, Pool, SnapshotError};
 pub use math::{Aabb, Iso, Mat3, Quat, Vec3};
 pub use shape::{ConvexHull, Shape};
+pub use world::{BodyRef, World};

@@ -1,0 +1,427 @@
+//! Rigid bodies: description, validated state, and the two integration stages of the
+//! step (velocities, then positions).
+
+use crate::config::WorldConfig;
+use crate::error::{finite_vec, non_negative, positive, Error, Input};
+use crate::math::{scalar, Aabb, Iso, Mat3, Quat, Vec3};
+use crate::shape::Shape;
+
+/// How a body moves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BodyKind {
+    /// Moved by forces, gravity and contacts.
+    Dynamic,
+    /// Never moves; infinite mass.
+    Static,
+    /// Moves with the velocity the user sets; infinite mass, pushes dynamic bodies.
+    Kinematic,
+}
+
+/// Surface properties. Two touching bodies combine theirs: restitution by the larger,
+/// each friction coefficient by the geometric mean `√(μa μb)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Material {
+    /// Coefficient of restitution, 0 (no bounce) to 1 (elastic).
+    pub restitution: f32,
+    /// Static friction coefficient (≥ 0): the Coulomb cone while a contact sticks.
+    pub static_friction: f32,
+    /// Kinetic friction coefficient (≥ 0): the cone while a contact slides.
+    pub kinetic_friction: f32,
+}
+
+impl Material {
+    /// No bounce, static friction 0.6, kinetic 0.4.
+    pub const DEFAULT: Material = Material {
+        restitution: 0.0,
+        static_friction: 0.6,
+        kinetic_friction: 0.4,
+    };
+
+    /// Check ranges: restitution in `[0, 1]`, frictions finite and `≥ 0`.
+    pub fn validate(&self) -> Result<(), Error> {
+        non_negative(self.restitution, Input::Material)?;
+        if self.restitution > 1.0 {
+            return Err(Error::OutOfRange(Input::Material));
+        }
+        non_negative(self.static_friction, Input::Material)?;
+        non_negative(self.kinetic_friction, Input::Material)?;
+        Ok(())
+    }
+
+    /// The material of a contact between `a` and `b`.
+    pub fn combine(a: &Material, b: &Material) -> Material {
+        Material {
+            restitution: scalar::max(a.restitution, b.restitution),
+            static_friction: scalar::sqrt(a.static_friction * b.static_friction),
+            kinetic_friction: scalar::sqrt(a.kinetic_friction * b.kinetic_friction),
+        }
+    }
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material::DEFAULT
+    }
+}
+
+/// How a dynamic body's mass is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum MassSpec {
+    /// Uniform density (kg/m³); mass and inertia follow from the shape.
+    Density(f32),
+    /// Total mass (kg); inertia scaled from the shape at uniform density.
+    Mass(f32),
+}
+
+/// Everything needed to add a body. Build with [`BodyDesc::dynamic`], [`BodyDesc::fixed`]
+/// or [`BodyDesc::kinematic`] and chain setters; [`crate::World::add`] validates it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyDesc<'a> {
+    /// Collision shape (in the body's frame).
+    pub shape: Shape<'a>,
+    /// Dynamic, static or kinematic.
+    pub kind: BodyKind,
+    /// Pose of the body's frame in the world.
+    pub pose: Iso,
+    /// Linear velocity of the centre of mass (m/s).
+    pub linear_velocity: Vec3,
+    /// Angular velocity (rad/s, world frame).
+    pub angular_velocity: Vec3,
+    /// Mass or density (dynamic bodies only). Default density 1000 kg/m³ (water).
+    pub mass: MassSpec,
+    /// Surface material.
+    pub material: Material,
+    /// Linear damping (1/s): velocity is scaled by `1 / (1 + dt · c)` each step.
+    pub linear_damping: f32,
+    /// Angular damping (1/s), as linear damping.
+    pub angular_damping: f32,
+    /// Collision group bits: this body is in these groups.
+    pub group: u32,
+    /// Collision mask bits: this body collides with bodies in these groups. A pair
+    /// collides when `a.group & b.mask != 0 && b.group & a.mask != 0`.
+    pub mask: u32,
+    /// A sensor reports enter/leave events and never pushes.
+    pub sensor: bool,
+    /// Sweep this body with time of impact when it moves fast (continuous collision).
+    pub ccd: bool,
+    /// Free for the user; carom never reads it.
+    pub user_data: u64,
+}
+
+impl<'a> BodyDesc<'a> {
+    fn with_kind(shape: Shape<'a>, kind: BodyKind) -> BodyDesc<'a> {
+        BodyDesc {
+            shape,
+            kind,
+            pose: Iso::IDENTITY,
+            linear_velocity: Vec3::ZERO,
+            angular_velocity: Vec3::ZERO,
+            mass: MassSpec::Density(1000.0),
+            material: Material::DEFAULT,
+            linear_damping: 0.0,
+            angular_damping: 0.0,
+            group: 1,
+            mask: u32::MAX,
+            sensor: false,
+            ccd: true,
+            user_data: 0,
+        }
+    }
+
+    /// A dynamic body.
+    pub fn dynamic(shape: Shape<'a>) -> BodyDesc<'a> {
+        Self::with_kind(shape, BodyKind::Dynamic)
+    }
+
+    /// A static body (`static` is a keyword).
+    pub fn fixed(shape: Shape<'a>) -> BodyDesc<'a> {
+        Self::with_kind(shape, BodyKind::Static)
+    }
+
+    /// A kinematic body.
+    pub fn kinematic(shape: Shape<'a>) -> BodyDesc<'a> {
+        Self::with_kind(shape, BodyKind::Kinematic)
+    }
+
+    /// Set the position (m).
+    pub fn position(mut self, p: Vec3) -> Self {
+        self.pose.position = p;
+        self
+    }
+
+    /// Set the rotation (unit quaternion).
+    pub fn rotation(mut self, q: Quat) -> Self {
+        self.pose.rotation = q;
+        self
+    }
+
+    /// Set the linear velocity (m/s).
+    pub fn velocity(mut self, v: Vec3) -> Self {
+        self.linear_velocity = v;
+        self
+    }
+
+    /// Set the angular velocity (rad/s).
+    pub fn angular_velocity(mut self, w: Vec3) -> Self {
+        self.angular_velocity = w;
+        self
+    }
+
+    /// Set a uniform density (kg/m³).
+    pub fn density(mut self, d: f32) -> Self {
+        self.mass = MassSpec::Density(d);
+        self
+    }
+
+    /// Set the total mass (kg).
+    pub fn mass(mut self, m: f32) -> Self {
+        self.mass = MassSpec::Mass(m);
+        self
+    }
+
+    /// Set the material.
+    pub fn material(mut self, m: Material) -> Self {
+        self.material = m;
+        self
+    }
+
+    /// Set linear and angular damping (1/s).
+    pub fn damping(mut self, linear: f32, angular: f32) -> Self {
+        self.linear_damping = linear;
+        self.angular_damping = angular;
+        self
+    }
+
+    /// Set collision group and mask bits.
+    pub fn filter(mut self, group: u32, mask: u32) -> Self {
+        self.group = group;
+        self.mask = mask;
+        self
+    }
+
+    /// Make the body a sensor (or not).
+    pub fn sensor(mut self, on: bool) -> Self {
+        self.sensor = on;
+        self
+    }
+
+    /// Switch continuous collision on or off (default on).
+    pub fn ccd(mut self, on: bool) -> Self {
+        self.ccd = on;
+        self
+    }
+
+    /// Set user data.
+    pub fn user_data(mut self, d: u64) -> Self {
+        self.user_data = d;
+        self
+    }
+}
+
+/// A body's state inside the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Body<'a> {
+    pub shape: Shape<'a>,
+    pub kind: BodyKind,
+    /// Pose of the body frame (the shape's frame) in the world.
+    pub pose: Iso,
+    /// Centre of mass in the body frame.
+    pub center_local: Vec3,
+    /// Velocity of the centre of mass (m/s).
+    pub linear_velocity: Vec3,
+    /// Angular velocity (rad/s, world).
+    pub angular_velocity: Vec3,
+    /// Force (N) and torque (N·m) accumulated for the next step, then cleared.
+    pub force: Vec3,
+    pub torque: Vec3,
+    /// Inverse mass (1/kg); 0 for static and kinematic bodies.
+    pub inv_mass: f32,
+    /// Inverse inertia about the centre of mass, body axes.
+    pub inv_inertia_local: Mat3,
+    /// `R I⁻¹ Rᵀ`, refreshed whenever the rotation changes.
+    pub inv_inertia_world: Mat3,
+    pub material: Material,
+    pub linear_damping: f32,
+    pub angular_damping: f32,
+    pub group: u32,
+    pub mask: u32,
+    pub sensor: bool,
+    pub ccd: bool,
+    pub awake: bool,
+    /// Seconds the body has been slow enough to sleep.
+    pub sleep_time: f32,
+    pub user_data: u64,
+    /// Pose at the start of the current step (for continuous collision).
+    pub pose0: Iso,
+    /// Movement bounds of the current step.
+    pub bounds: Aabb,
+}
+
+impl<'a> Body<'a> {
+    /// Validate a description and derive mass properties.
+    pub fn from_desc(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
+        finite_vec(d.pose.position, Input::Position)?;
+        if !d.pose.rotation.is_finite() {
+            return Err(Error::NonFinite(Input::Rotation));
+        }
+        if !d.pose.rotation.is_unit() {
+            return Err(Error::NotUnit(Input::Rotation));
+        }
+        finite_vec(d.linear_velocity, Input::LinearVelocity)?;
+        finite_vec(d.angular_velocity, Input::AngularVelocity)?;
+        d.material.validate()?;
+        non_negative(d.linear_damping, Input::Damping)?;
+        non_negative(d.angular_damping, Input::Damping)?;
+        let (inv_mass, inv_inertia_local, center_local) = match d.kind {
+            BodyKind::Dynamic => {
+                if d.shape.is_static_only() {
+                    return Err(Error::StaticOnly);
+                }
+                let props = match d.mass {
+                    MassSpec::Density(rho) => d.shape.mass_properties(positive(rho, Input::Density)?)?,
+                    MassSpec::Mass(m) => {
+                        let m = positive(m, Input::Mass)?;
+                        let unit = d.shape.mass_properties(1.0)?;
+                        let k = m / unit.mass;
+                        crate::shape::MassProperties {
+                            mass: m,
+                            center: unit.center,
+                            inertia: unit.inertia.scale(k),
+                        }
+                    }
+                };
+                let inv_i = props
+                    .inertia
+                    .inverse()
+                    .filter(|m| m.is_finite())
+                    .ok_or(Error::NotPositive(Input::Mass))?;
+                if !(props.mass > 0.0 && props.mass.is_finite()) {
+                    return Err(Error::NotPositive(Input::Mass));
+                }
+                (1.0 / props.mass, inv_i, props.center)
+            }
+            BodyKind::Static | BodyKind::Kinematic => (0.0, Mat3::ZERO, Vec3::ZERO),
+        };
+        let rotation = d.pose.rotation.normalize();
+        let pose = Iso::new(d.pose.position, rotation);
+        let still = d.kind == BodyKind::Static;
+        let mut b = Body {
+            shape: d.shape,
+            kind: d.kind,
+            pose,
+            center_local,
+            linear_velocity: if still { Vec3::ZERO } else { d.linear_velocity },
+            angular_velocity: if still { Vec3::ZERO } else { d.angular_velocity },
+            force: Vec3::ZERO,
+            torque: Vec3::ZERO,
+            inv_mass,
+            inv_inertia_local,
+            inv_inertia_world: Mat3::ZERO,
+            material: d.material,
+            linear_damping: d.linear_damping,
+            angular_damping: d.angular_damping,
+            group: d.group,
+            mask: d.mask,
+            sensor: d.sensor,
+            ccd: d.ccd,
+            awake: !still,
+            sleep_time: 0.0,
+            user_data: d.user_data,
+            pose0: pose,
+            bounds: d.shape.aabb(&pose),
+        };
+        b.update_inertia();
+        Ok(b)
+    }
+
+    /// True for a dynamic body.
+    #[inline]
+    pub fn is_dynamic(&self) -> bool {
+        self.kind == BodyKind::Dynamic
+    }
+
+    /// Centre of mass in the world (m).
+    #[inline]
+    pub fn world_center(&self) -> Vec3 {
+        self.pose.transform_point(self.center_local)
+    }
+
+    /// Refresh `R I⁻¹ Rᵀ` after the rotation changed.
+    #[inline]
+    pub fn update_inertia(&mut self) {
+        if self.is_dynamic() {
+            let r = Mat3::from_quat(self.pose.rotation);
+            self.inv_inertia_world = self.inv_inertia_local.rotated(&r);
+        }
+    }
+
+    /// Velocity of the world point `p` (m/s): `v + ω × (p − c)`.
+    #[inline]
+    pub fn velocity_at(&self, p: Vec3) -> Vec3 {
+        self.linear_velocity + self.angular_velocity.cross(p - self.world_center())
+    }
+
+    /// Apply an impulse `j` (N·s) at the world point `p`.
+    #[inline]
+    pub fn apply_impulse_at(&mut self, j: Vec3, p: Vec3) {
+        if self.is_dynamic() {
+            let r = p - self.world_center();
+            self.linear_velocity += j * self.inv_mass;
+            self.angular_velocity += self.inv_inertia_world.mul_vec(r.cross(j));
+        }
+    }
+
+    /// Stage 1: `v += dt (g + F/m)`, `ω += dt I⁻¹ τ`, then damping `v /= 1 + dt c`,
+    /// then the speed limits. Forces are cleared afterwards.
+    pub fn integrate_velocity(&mut self, cfg: &WorldConfig, dt: f32) {
+        if !self.is_dynamic() || !self.awake {
+            self.force = Vec3::ZERO;
+            self.torque = Vec3::ZERO;
+            return;
+        }
+        let a = cfg.gravity + self.force * self.inv_mass;
+        self.linear_velocity += a * dt;
+        self.angular_velocity += self.inv_inertia_world.mul_vec(self.torque) * dt;
+        self.linear_velocity *= 1.0 / (1.0 + dt * self.linear_damping);
+        self.angular_velocity *= 1.0 / (1.0 + dt * self.angular_damping);
+        self.linear_velocity = clamp_length(self.linear_velocity, cfg.max_linear_speed);
+        self.angular_velocity = clamp_length(self.angular_velocity, cfg.max_angular_speed);
+        self.force = Vec3::ZERO;
+        self.torque = Vec3::ZERO;
+    }
+
+    /// Stage 8: move the centre of mass by `v dt` and turn by `ω dt`
+    /// (`q += ½ ω q dt`, normalised), keeping the centre of mass where it belongs.
+    pub fn integrate_position(&mut self, dt: f32) {
+        if self.kind == BodyKind::Static || !self.awake {
+            return;
+        }
+        let c = self.world_center() + self.linear_velocity * dt;
+        let q = self.pose.rotation.integrate(self.angular_velocity, dt);
+        self.pose = Iso::new(c - q.rotate(self.center_local), q);
+        self.update_inertia();
+    }
+
+    /// Move the body so its centre of mass is at `c` with rotation `q` (projection, CCD).
+    pub fn set_center_pose(&mut self, c: Vec3, q: Quat) {
+        self.pose = Iso::new(c - q.rotate(self.center_local), q);
+        self.update_inertia();
+    }
+}
+
+/// `v` shortened to at most `max` (m/s or rad/s).
+#[inline]
+fn clamp_length(v: Vec3, max: f32) -> Vec3 {
+    let l2 = v.length_squared();
+    if l2 > max * max {
+        v * (max / scalar::sqrt(l2))
+    } else {
+        v
+    }
+}

@@ -1,0 +1,14 @@
+//! Stateful simulation: bodies in pools, the stages of the step, queries.
+
+pub mod body;
+pub(crate) mod broad_phase;
+pub(crate) mod ccd;
+pub(crate) mod contact;
+pub mod events;
+pub(crate) mod pool;
+pub(crate) mod projection;
+pub mod query;
+pub(crate) mod sleep;
+pub(crate) mod solver;
+
+pub use pool::BodyHandle;

@@ -1,0 +1,1 @@
+//! World queries: ray casts and shape overlap, filtered by group and mask.

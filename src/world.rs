@@ -1,0 +1,375 @@
+//! The world: fixed-capacity pools of bodies, contacts and events, and the fixed step.
+
+use heapless::Vec as HVec;
+
+use crate::config::WorldConfig;
+use crate::dynamics::body::{Body, BodyDesc, BodyKind, Material};
+use crate::dynamics::broad_phase::{self, BroadPhase};
+use crate::dynamics::contact::{self, Contact};
+use crate::dynamics::events::{Event, StepReport};
+use crate::dynamics::pool::{BodyHandle, Pool};
+use crate::dynamics::{ccd, projection, sleep, solver};
+use crate::error::{finite_vec, Error, Input, Pool as PoolKind};
+use crate::math::{Iso, Quat, Vec3};
+use crate::shape::Shape;
+
+/// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
+/// many candidate pairs per step) and `EVENTS` events per step.
+///
+/// Everything lives inline: no heap. A world is large (roughly 300 bytes per body and
+/// 700 per contact): keep big ones in a `static` or a `Box`, or on a thread with a big
+/// stack.
+#[derive(Clone, Debug)]
+pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize = 256> {
+    pub(crate) config: WorldConfig,
+    pub(crate) bodies: Pool<Body<'a>, BODIES>,
+    pub(crate) broad: BroadPhase<BODIES>,
+    pub(crate) pairs: HVec<(u32, u32), CONTACTS>,
+    pub(crate) contacts: HVec<Contact, CONTACTS>,
+    pub(crate) scratch: HVec<Contact, CONTACTS>,
+    pub(crate) events: HVec<Event, EVENTS>,
+    pub(crate) islands: [u32; BODIES],
+    pub(crate) step_count: u64,
+    pub(crate) report: StepReport,
+}
+
+impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize> Default
+    for World<'a, BODIES, CONTACTS, EVENTS>
+{
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
+    World<'a, BODIES, CONTACTS, EVENTS>
+{
+    /// An empty world with [`WorldConfig::DEFAULT`]. `const`, so a world can be a `static`.
+    pub const fn new() -> Self {
+        World {
+            config: WorldConfig::DEFAULT,
+            bodies: Pool::new(),
+            broad: BroadPhase::new(),
+            pairs: HVec::new(),
+            contacts: HVec::new(),
+            scratch: HVec::new(),
+            events: HVec::new(),
+            islands: [0; BODIES],
+            step_count: 0,
+            report: StepReport {
+                awake_bodies: 0,
+                pairs: 0,
+                contacts: 0,
+                points: 0,
+                ccd_sweeps: 0,
+                ccd_hits: 0,
+                dropped_pairs: 0,
+                dropped_contacts: 0,
+                dropped_events: 0,
+            },
+        }
+    }
+
+    /// An empty world with `config`, which is validated first.
+    pub fn with_config(config: WorldConfig) -> Result<Self, Error> {
+        config.validate()?;
+        let mut w = Self::new();
+        w.config = config;
+        Ok(w)
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &WorldConfig {
+        &self.config
+    }
+
+    /// Replace the configuration (validated; unchanged on error).
+    pub fn set_config(&mut self, config: WorldConfig) -> Result<(), Error> {
+        config.validate()?;
+        self.config = config;
+        Ok(())
+    }
+
+    /// Advance the world by one fixed step of `config.dt` seconds.
+    ///
+    /// The pipeline, one call per stage (see DESIGN.md, "One fixed step"):
+    pub fn step(&mut self) -> StepReport {
+        let cfg = self.config;
+        let h = cfg.dt / cfg.substeps as f32;
+        let mut report = StepReport::default();
+        self.events.clear();
+        for _ in 0..cfg.substeps {
+            self.integrate_velocities(h); // 1  gravity, forces, damping
+            broad_phase::update_bounds(&mut self.bodies, &cfg, h); // 2  movement bounds
+            self.broad.find_pairs(&self.bodies, &mut self.pairs, &mut report); // 3  broad phase
+            // 4 mid phase: every shape is a single convex part, so a pair is one part pair.
+            contact::update_contacts(
+                // 5 narrow phase, 6 contact cache
+                &mut self.contacts,
+                &mut self.scratch,
+                &self.pairs,
+                &self.bodies,
+                &cfg,
+                &mut self.events,
+                &mut report,
+            );
+            solver::solve_velocities(&mut self.contacts, &mut self.bodies, &cfg, h); // 7
+            self.integrate_positions(h); // 8  x += v h, q += ½ ω q h
+            ccd::sweep_fast_bodies(&mut self.bodies, &self.pairs, &cfg, h, &mut report); // 9
+            projection::project(&self.contacts, &mut self.bodies, &cfg); // 10
+        }
+        report.awake_bodies = sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg); // 11
+        self.step_count = self.step_count.wrapping_add(1);
+        self.report = report;
+        report
+    }
+
+    fn integrate_velocities(&mut self, h: f32) {
+        let cfg = self.config;
+        for (_, b) in self.bodies.iter_mut() {
+            b.pose0 = b.pose;
+            b.integrate_velocity(&cfg, h);
+        }
+    }
+
+    fn integrate_positions(&mut self, h: f32) {
+        for (_, b) in self.bodies.iter_mut() {
+            b.integrate_position(h);
+        }
+    }
+
+    /// The report of the last step.
+    pub fn last_report(&self) -> StepReport {
+        self.report
+    }
+
+    /// Events of the last step, in the order they happened.
+    pub fn events(&self) -> &[Event] {
+        &self.events
+    }
+
+    /// Number of steps taken.
+    pub fn step_count(&self) -> u64 {
+        self.step_count
+    }
+
+    /// Number of bodies.
+    pub fn body_count(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Number of contacts (manifolds) alive after the last step.
+    pub fn contact_count(&self) -> usize {
+        self.contacts.len()
+    }
+
+    /// Add a body. Fails with the description's first invalid input, or with
+    /// `PoolFull(Bodies)`; the world is unchanged on error.
+    pub fn add(&mut self, desc: BodyDesc<'a>) -> Result<BodyHandle, Error> {
+        let body = Body::from_desc(&desc)?;
+        self.bodies
+            .insert(body)
+            .ok_or(Error::PoolFull(PoolKind::Bodies))
+    }
+
+    /// Remove a body and its contacts (without end events).
+    pub fn remove(&mut self, h: BodyHandle) -> Result<(), Error> {
+        self.bodies.remove(h).ok_or(Error::StaleHandle)?;
+        self.contacts.retain(|c| c.a != h.index && c.b != h.index);
+        Ok(())
+    }
+
+    /// Handles of all bodies in slot order.
+    pub fn handles(&self) -> impl Iterator<Item = BodyHandle> + '_ {
+        self.bodies
+            .iter()
+            .filter_map(|(i, _)| self.bodies.handle_at(i))
+    }
+
+    /// A read-only view of a body.
+    pub fn body(&self, h: BodyHandle) -> Result<BodyRef<'_, 'a>, Error> {
+        self.bodies.get(h).map(BodyRef).ok_or(Error::StaleHandle)
+    }
+
+    fn body_mut(&mut self, h: BodyHandle) -> Result<&mut Body<'a>, Error> {
+        self.bodies.get_mut(h).ok_or(Error::StaleHandle)
+    }
+
+    /// Teleport a body (wakes it). Fails on a stale handle or an invalid pose.
+    pub fn set_pose(&mut self, h: BodyHandle, pose: Iso) -> Result<(), Error> {
+        crate::collide::check_pose(&pose)?;
+        let b = self.body_mut(h)?;
+        b.pose = Iso::new(pose.position, pose.rotation.normalize());
+        b.pose0 = b.pose;
+        b.bounds = b.shape.aabb(&b.pose);
+        b.update_inertia();
+        wake(b);
+        Ok(())
+    }
+
+    /// Set the linear velocity of a body's centre of mass (m/s); wakes it. Ignored for
+    /// static bodies.
+    pub fn set_linear_velocity(&mut self, h: BodyHandle, v: Vec3) -> Result<(), Error> {
+        finite_vec(v, Input::LinearVelocity)?;
+        let b = self.body_mut(h)?;
+        if b.kind != BodyKind::Static {
+            b.linear_velocity = v;
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Set the angular velocity (rad/s, world); wakes the body. Ignored for static bodies.
+    pub fn set_angular_velocity(&mut self, h: BodyHandle, w: Vec3) -> Result<(), Error> {
+        finite_vec(w, Input::AngularVelocity)?;
+        let b = self.body_mut(h)?;
+        if b.kind != BodyKind::Static {
+            b.angular_velocity = w;
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Add a force (N) at the centre of mass for the next step; wakes the body.
+    pub fn apply_force(&mut self, h: BodyHandle, f: Vec3) -> Result<(), Error> {
+        finite_vec(f, Input::Force)?;
+        let b = self.body_mut(h)?;
+        if b.is_dynamic() {
+            b.force += f;
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Add a torque (N·m, world) for the next step; wakes the body.
+    pub fn apply_torque(&mut self, h: BodyHandle, t: Vec3) -> Result<(), Error> {
+        finite_vec(t, Input::Force)?;
+        let b = self.body_mut(h)?;
+        if b.is_dynamic() {
+            b.torque += t;
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Apply an impulse (N·s) at a world point now; wakes the body.
+    pub fn apply_impulse_at(&mut self, h: BodyHandle, impulse: Vec3, point: Vec3) -> Result<(), Error> {
+        finite_vec(impulse, Input::Force)?;
+        finite_vec(point, Input::Position)?;
+        let b = self.body_mut(h)?;
+        if b.is_dynamic() {
+            b.apply_impulse_at(impulse, point);
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Wake a body.
+    pub fn wake(&mut self, h: BodyHandle) -> Result<(), Error> {
+        let b = self.body_mut(h)?;
+        if b.kind != BodyKind::Static {
+            wake(b);
+        }
+        Ok(())
+    }
+
+    /// Put a body to sleep now (it wakes when touched by an awake body, or by a setter).
+    pub fn sleep(&mut self, h: BodyHandle) -> Result<(), Error> {
+        let b = self.body_mut(h)?;
+        if b.kind != BodyKind::Static {
+            b.awake = false;
+            b.linear_velocity = Vec3::ZERO;
+            b.angular_velocity = Vec3::ZERO;
+        }
+        Ok(())
+    }
+
+    /// Change a body's material (validated).
+    pub fn set_material(&mut self, h: BodyHandle, m: Material) -> Result<(), Error> {
+        m.validate()?;
+        self.body_mut(h)?.material = m;
+        Ok(())
+    }
+}
+
+fn wake(b: &mut Body<'_>) {
+    b.awake = true;
+    b.sleep_time = 0.0;
+}
+
+/// A read-only view of a body, from [`World::body`].
+#[derive(Clone, Copy, Debug)]
+pub struct BodyRef<'w, 'a>(&'w Body<'a>);
+
+impl<'a> BodyRef<'_, 'a> {
+    /// Pose of the body frame (m, unit quaternion).
+    pub fn pose(&self) -> Iso {
+        self.0.pose
+    }
+    /// Position of the body frame's origin (m).
+    pub fn position(&self) -> Vec3 {
+        self.0.pose.position
+    }
+    /// Rotation.
+    pub fn rotation(&self) -> Quat {
+        self.0.pose.rotation
+    }
+    /// Centre of mass (world, m).
+    pub fn center_of_mass(&self) -> Vec3 {
+        self.0.world_center()
+    }
+    /// Linear velocity of the centre of mass (m/s).
+    pub fn linear_velocity(&self) -> Vec3 {
+        self.0.linear_velocity
+    }
+    /// Angular velocity (rad/s, world).
+    pub fn angular_velocity(&self) -> Vec3 {
+        self.0.angular_velocity
+    }
+    /// Velocity of a world point attached to the body (m/s).
+    pub fn velocity_at(&self, p: Vec3) -> Vec3 {
+        self.0.velocity_at(p)
+    }
+    /// Mass (kg); infinite for static and kinematic bodies.
+    pub fn mass(&self) -> f32 {
+        if self.0.inv_mass > 0.0 {
+            1.0 / self.0.inv_mass
+        } else {
+            f32::INFINITY
+        }
+    }
+    /// Dynamic, static or kinematic.
+    pub fn kind(&self) -> BodyKind {
+        self.0.kind
+    }
+    /// The collision shape.
+    pub fn shape(&self) -> Shape<'a> {
+        self.0.shape
+    }
+    /// The material.
+    pub fn material(&self) -> Material {
+        self.0.material
+    }
+    /// False while the body sleeps.
+    pub fn is_awake(&self) -> bool {
+        self.0.awake
+    }
+    /// The user data given at creation.
+    pub fn user_data(&self) -> u64 {
+        self.0.user_data
+    }
+    /// Kinetic energy `½ m v² + ½ ωᵀ I ω` (J); 0 for static and kinematic bodies.
+    pub fn kinetic_energy(&self) -> f32 {
+        let b = self.0;
+        if b.inv_mass <= 0.0 {
+            return 0.0;
+        }
+        let lin = 0.5 * b.linear_velocity.length_squared() / b.inv_mass;
+        // ωᵀ I ω with I = (I⁻¹)⁻¹ in world axes.
+        let ang = match b.inv_inertia_world.inverse() {
+            Some(i) => 0.5 * b.angular_velocity.dot(i.mul_vec(b.angular_velocity)),
+            None => 0.0,
+        };
+        lin + ang
+    }
+}
