@@ -43,6 +43,7 @@ pub mod error;
 pub mod math;
 pub mod props;
 pub mod rng;
+pub mod scenes;
 pub mod shape;
 mod world;
 
