@@ -127,6 +127,8 @@ pub enum SnapshotError {
     Checksum,
     /// The contents decode to an invalid state.
     Corrupt,
+    /// A body's hull shape was not found among the hulls given to restore.
+    MissingHull,
 }
 
 impl core::fmt::Display for Error {

@@ -101,8 +101,9 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         for _ in 0..cfg.substeps {
             self.integrate_velocities(h); // 1  gravity, forces, damping
             broad_phase::update_bounds(&mut self.bodies, &cfg, h); // 2  movement bounds
-            self.broad.find_pairs(&self.bodies, &mut self.pairs, &mut report); // 3  broad phase
-            // 4 mid phase: every shape is a single convex part, so a pair is one part pair.
+            self.broad
+                .find_pairs(&self.bodies, &mut self.pairs, &mut report); // 3  broad phase
+                                                                         // 4 mid phase: every shape is a single convex part, so a pair is one part pair.
             contact::update_contacts(
                 // 5 narrow phase, 6 contact cache
                 &mut self.contacts,
@@ -118,7 +119,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             ccd::sweep_fast_bodies(&mut self.bodies, &self.pairs, &cfg, h, &mut report); // 9
             projection::project(&self.contacts, &mut self.bodies, &cfg); // 10
         }
-        report.awake_bodies = sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg); // 11
+        report.awake_bodies =
+            sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg); // 11
         self.step_count = self.step_count.wrapping_add(1);
         self.report = report;
         report
@@ -253,7 +255,12 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 
     /// Apply an impulse (N·s) at a world point now; wakes the body.
-    pub fn apply_impulse_at(&mut self, h: BodyHandle, impulse: Vec3, point: Vec3) -> Result<(), Error> {
+    pub fn apply_impulse_at(
+        &mut self,
+        h: BodyHandle,
+        impulse: Vec3,
+        point: Vec3,
+    ) -> Result<(), Error> {
         finite_vec(impulse, Input::Force)?;
         finite_vec(point, Input::Position)?;
         let b = self.body_mut(h)?;

@@ -284,7 +284,9 @@ impl<'a> Body<'a> {
                     return Err(Error::StaticOnly);
                 }
                 let props = match d.mass {
-                    MassSpec::Density(rho) => d.shape.mass_properties(positive(rho, Input::Density)?)?,
+                    MassSpec::Density(rho) => {
+                        d.shape.mass_properties(positive(rho, Input::Density)?)?
+                    }
                     MassSpec::Mass(m) => {
                         let m = positive(m, Input::Mass)?;
                         let unit = d.shape.mass_properties(1.0)?;
@@ -317,7 +319,11 @@ impl<'a> Body<'a> {
             pose,
             center_local,
             linear_velocity: if still { Vec3::ZERO } else { d.linear_velocity },
-            angular_velocity: if still { Vec3::ZERO } else { d.angular_velocity },
+            angular_velocity: if still {
+                Vec3::ZERO
+            } else {
+                d.angular_velocity
+            },
             force: Vec3::ZERO,
             torque: Vec3::ZERO,
             inv_mass,

@@ -9,6 +9,7 @@ pub(crate) mod pool;
 pub(crate) mod projection;
 pub mod query;
 pub(crate) mod sleep;
+pub mod snapshot;
 pub(crate) mod solver;
 
 pub use pool::BodyHandle;

@@ -71,7 +71,12 @@ impl<T: Copy, const N: usize> Pool<T, N> {
             *g = g.wrapping_add(1);
         }
         self.len -= 1;
-        while self.high > 0 && self.slots.get(self.high as usize - 1).is_some_and(|s| s.is_none()) {
+        while self.high > 0
+            && self
+                .slots
+                .get(self.high as usize - 1)
+                .is_some_and(|s| s.is_none())
+        {
             self.high -= 1;
         }
         item
@@ -125,6 +130,29 @@ impl<T: Copy, const N: usize> Pool<T, N> {
         self.generations.get(i).copied().unwrap_or(0)
     }
 
+    /// Overwrite slot `i` with a generation and an item (snapshot restore); keeps the
+    /// counts right. Out-of-range slots are ignored.
+    pub fn set_slot(&mut self, i: usize, generation: u32, item: Option<T>) {
+        let (Some(slot), Some(g)) = (self.slots.get_mut(i), self.generations.get_mut(i)) else {
+            return;
+        };
+        let was = slot.is_some();
+        *slot = item;
+        *g = generation;
+        match (was, slot.is_some()) {
+            (false, true) => self.len += 1,
+            (true, false) => self.len -= 1,
+            _ => {}
+        }
+        if item_present(self.slots.get(i)) {
+            self.high = self.high.max(i as u32 + 1);
+        } else {
+            while self.high > 0 && !item_present(self.slots.get(self.high as usize - 1)) {
+                self.high -= 1;
+            }
+        }
+    }
+
     /// Two distinct used slots mutably at once; `None` if `i == j` or either is free.
     pub fn pair_mut(&mut self, i: usize, j: usize) -> Option<(&mut T, &mut T)> {
         if i == j || i >= N || j >= N {
@@ -153,6 +181,10 @@ impl<T: Copy, const N: usize> Pool<T, N> {
             .enumerate()
             .filter_map(|(i, s)| s.as_mut().map(|t| (i, t)))
     }
+}
+
+fn item_present<T>(slot: Option<&Option<T>>) -> bool {
+    matches!(slot, Some(Some(_)))
 }
 
 #[cfg(test)]

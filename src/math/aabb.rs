@@ -73,7 +73,10 @@ impl Aabb {
     /// Grown by `margin` on every side.
     #[inline]
     pub fn expanded(&self, margin: f32) -> Aabb {
-        Aabb::new(self.min - Vec3::splat(margin), self.max + Vec3::splat(margin))
+        Aabb::new(
+            self.min - Vec3::splat(margin),
+            self.max + Vec3::splat(margin),
+        )
     }
 
     /// Moved by `d`.
@@ -111,7 +114,10 @@ mod tests {
 
     #[test]
     fn rotated_box_bounds_grow_by_sqrt2() {
-        let iso = Iso::new(Vec3::ZERO, Quat::from_axis_angle(Vec3::Y, core::f32::consts::FRAC_PI_4));
+        let iso = Iso::new(
+            Vec3::ZERO,
+            Quat::from_axis_angle(Vec3::Y, core::f32::consts::FRAC_PI_4),
+        );
         let b = Aabb::from_local_box(&iso, Vec3::new(1.0, 1.0, 1.0));
         assert!((b.max.x - core::f32::consts::SQRT_2).abs() < 1e-5);
         assert!((b.max.y - 1.0).abs() < 1e-5);

@@ -102,7 +102,10 @@ mod tests {
         let p = Vec3::new(-0.5, 0.7, 2.0);
         let q = a.inverse_transform_point(a.transform_point(p));
         assert!((p - q).length() < 1e-5);
-        let b = Iso::new(Vec3::new(-2.0, 0.0, 1.0), Quat::from_axis_angle(Vec3::X, 0.4));
+        let b = Iso::new(
+            Vec3::new(-2.0, 0.0, 1.0),
+            Quat::from_axis_angle(Vec3::X, 0.4),
+        );
         let b_in_a = a.inv_mul(&b);
         let w1 = b.transform_point(p);
         let w2 = a.transform_point(b_in_a.transform_point(p));

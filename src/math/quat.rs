@@ -110,13 +110,7 @@ impl Quat {
         let h = 0.5 * dt;
         let w = Quat::from_xyzw(omega.x * h, omega.y * h, omega.z * h, 0.0);
         let dq = w * self;
-        Quat::from_xyzw(
-            self.x + dq.x,
-            self.y + dq.y,
-            self.z + dq.z,
-            self.w + dq.w,
-        )
-        .normalize()
+        Quat::from_xyzw(self.x + dq.x, self.y + dq.y, self.z + dq.z, self.w + dq.w).normalize()
     }
 
     /// `-0.0` components replaced by `+0.0` (for hashing and snapshots).

@@ -121,7 +121,11 @@ impl Vec3 {
     /// Component-wise absolute value.
     #[inline]
     pub fn abs(self) -> Vec3 {
-        Vec3::new(scalar::abs(self.x), scalar::abs(self.y), scalar::abs(self.z))
+        Vec3::new(
+            scalar::abs(self.x),
+            scalar::abs(self.y),
+            scalar::abs(self.z),
+        )
     }
 
     /// The largest component.

@@ -1,0 +1,760 @@
+//! Checksums and snapshots of the world's dynamic state.
+//!
+//! # Format (version 1)
+//! Little-endian throughout, no pointer-sized values:
+//!
+//! | bytes | field |
+//! | --- | --- |
+//! | 8 | magic `b"CAROMSNP"` |
+//! | 2 | format version ([`FORMAT_VERSION`]) |
+//! | 1 | math backend: 0 libm, 1 micromath |
+//! | 1 | reserved, 0 |
+//! | 4, 4, 4 | capacities `BODIES`, `CONTACTS`, `EVENTS` |
+//! | 4 | payload length in bytes |
+//! | 8 | FNV-1a 64 of the payload (integrity check) |
+//! | … | payload |
+//!
+//! The payload holds the configuration, the step counter, every body slot (generation,
+//! and for a used slot the whole body: shape, pose, velocities, mass, material, flags,
+//! sleep timer), the broad-phase order and the contact cache with its warm-start
+//! impulses. Floats are stored as their bit patterns with `-0.0` canonicalised to `+0.0`.
+//! Hull shapes are stored as a fingerprint (FNV-1a 64 of the hull's data); `restore`
+//! finds the hull among those the target world's bodies already use (or those passed to
+//! [`World::restore_with_hulls`]).
+//!
+//! # Checksum
+//! [`World::checksum`] is FNV-1a 64 over a canonical stream: the step counter; for every
+//! live body in slot order its slot, generation, pose, velocities, awake flag and sleep
+//! timer; for every contact its bodies, normal, and per point the feature id and the
+//! accumulated normal and friction impulses. Free slots never count.
+
+use super::body::{Body, BodyKind, Material};
+use super::contact::{Contact, ContactPoint};
+use crate::config::WorldConfig;
+use crate::error::{Error, SnapshotError};
+use crate::math::{Aabb, Iso, Mat3, Quat, Vec3};
+use crate::shape::{Capsule, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle};
+use crate::World;
+
+/// Snapshot format version; bumped whenever the byte layout changes.
+pub const FORMAT_VERSION: u16 = 1;
+
+const MAGIC: [u8; 8] = *b"CAROMSNP";
+const HEADER_LEN: usize = 8 + 2 + 1 + 1 + 12 + 4 + 8;
+
+/// 0 for libm, 1 for micromath: snapshots from another backend are refused.
+#[cfg(not(feature = "micromath"))]
+pub const MATH_BACKEND: u8 = 0;
+/// 0 for libm, 1 for micromath: snapshots from another backend are refused.
+#[cfg(feature = "micromath")]
+pub const MATH_BACKEND: u8 = 1;
+
+/// FNV-1a 64-bit offset basis.
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+const FNV_PRIME: u64 = 0x0000_0100_0000_01b3;
+
+/// Where encoded bytes go: a hash or a buffer.
+trait Sink {
+    fn put(&mut self, bytes: &[u8]);
+
+    fn u8(&mut self, v: u8) {
+        self.put(&[v]);
+    }
+    fn u16(&mut self, v: u16) {
+        self.put(&v.to_le_bytes());
+    }
+    fn u32(&mut self, v: u32) {
+        self.put(&v.to_le_bytes());
+    }
+    fn u64(&mut self, v: u64) {
+        self.put(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.u32(crate::math::scalar::canonical(v).to_bits());
+    }
+    fn vec3(&mut self, v: Vec3) {
+        self.f32(v.x);
+        self.f32(v.y);
+        self.f32(v.z);
+    }
+    fn quat(&mut self, q: Quat) {
+        self.f32(q.x);
+        self.f32(q.y);
+        self.f32(q.z);
+        self.f32(q.w);
+    }
+    fn iso(&mut self, i: &Iso) {
+        self.vec3(i.position);
+        self.quat(i.rotation);
+    }
+    fn mat3(&mut self, m: &Mat3) {
+        self.vec3(m.x);
+        self.vec3(m.y);
+        self.vec3(m.z);
+    }
+}
+
+/// FNV-1a 64 over everything put into it.
+pub(crate) struct Fnv(pub u64);
+
+impl Fnv {
+    pub(crate) fn new() -> Fnv {
+        Fnv(FNV_OFFSET)
+    }
+}
+
+impl Sink for Fnv {
+    fn put(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.0 = (self.0 ^ *b as u64).wrapping_mul(FNV_PRIME);
+        }
+    }
+}
+
+/// Counts bytes without storing them.
+struct Counter(usize);
+
+impl Sink for Counter {
+    fn put(&mut self, bytes: &[u8]) {
+        self.0 += bytes.len();
+    }
+}
+
+/// Writes into a slice; `pos` runs past the end when it is too small.
+struct Writer<'b> {
+    buf: &'b mut [u8],
+    pos: usize,
+}
+
+impl Sink for Writer<'_> {
+    fn put(&mut self, bytes: &[u8]) {
+        let end = self.pos + bytes.len();
+        if let Some(dst) = self.buf.get_mut(self.pos..end) {
+            dst.copy_from_slice(bytes);
+        }
+        self.pos = end;
+    }
+}
+
+/// Reads from a slice; every read past the end is `Truncated`.
+struct Reader<'b> {
+    buf: &'b [u8],
+    pos: usize,
+}
+
+type R<T> = Result<T, SnapshotError>;
+
+impl<'b> Reader<'b> {
+    fn take<const K: usize>(&mut self) -> R<[u8; K]> {
+        let s = self
+            .buf
+            .get(self.pos..self.pos + K)
+            .ok_or(SnapshotError::Truncated)?;
+        let mut a = [0u8; K];
+        a.copy_from_slice(s);
+        self.pos += K;
+        Ok(a)
+    }
+    fn u8(&mut self) -> R<u8> {
+        Ok(self.take::<1>()?[0])
+    }
+    fn u16(&mut self) -> R<u16> {
+        Ok(u16::from_le_bytes(self.take()?))
+    }
+    fn u32(&mut self) -> R<u32> {
+        Ok(u32::from_le_bytes(self.take()?))
+    }
+    fn u64(&mut self) -> R<u64> {
+        Ok(u64::from_le_bytes(self.take()?))
+    }
+    fn bool(&mut self) -> R<bool> {
+        match self.u8()? {
+            0 => Ok(false),
+            1 => Ok(true),
+            _ => Err(SnapshotError::Corrupt),
+        }
+    }
+    /// A finite float.
+    fn f32(&mut self) -> R<f32> {
+        let v = f32::from_bits(self.u32()?);
+        if v.is_finite() {
+            Ok(v)
+        } else {
+            Err(SnapshotError::Corrupt)
+        }
+    }
+    fn vec3(&mut self) -> R<Vec3> {
+        Ok(Vec3::new(self.f32()?, self.f32()?, self.f32()?))
+    }
+    fn quat(&mut self) -> R<Quat> {
+        let q = Quat::from_xyzw(self.f32()?, self.f32()?, self.f32()?, self.f32()?);
+        if q.is_unit() {
+            Ok(q)
+        } else {
+            Err(SnapshotError::Corrupt)
+        }
+    }
+    fn iso(&mut self) -> R<Iso> {
+        Ok(Iso::new(self.vec3()?, self.quat()?))
+    }
+    fn mat3(&mut self) -> R<Mat3> {
+        Ok(Mat3::from_cols(self.vec3()?, self.vec3()?, self.vec3()?))
+    }
+}
+
+/// Fingerprint of a hull: FNV-1a 64 over its vertices and face planes.
+pub(crate) fn hull_fingerprint(h: &ConvexHull) -> u64 {
+    let mut f = Fnv::new();
+    for v in h.vertices() {
+        f.vec3(*v);
+    }
+    for i in 0..h.face_count() {
+        let (n, d) = h.plane(i);
+        f.vec3(n);
+        f.f32(d);
+    }
+    f.0
+}
+
+fn put_shape(s: &mut impl Sink, shape: &Shape<'_>) {
+    match shape {
+        Shape::Sphere(x) => {
+            s.u8(0);
+            s.f32(x.radius);
+        }
+        Shape::Capsule(x) => {
+            s.u8(1);
+            s.f32(x.half_height);
+            s.f32(x.radius);
+        }
+        Shape::Cuboid(x) => {
+            s.u8(2);
+            s.vec3(x.half_extents);
+        }
+        Shape::Hull(h) => {
+            s.u8(3);
+            s.u64(hull_fingerprint(h));
+        }
+        Shape::HalfSpace(p) => {
+            s.u8(4);
+            s.vec3(p.normal);
+        }
+        Shape::Triangle(t) => {
+            s.u8(5);
+            for v in t.vertices {
+                s.vec3(v);
+            }
+        }
+    }
+}
+
+fn get_shape<'a>(
+    r: &mut Reader<'_>,
+    hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>,
+) -> R<Shape<'a>> {
+    let bad = |_| SnapshotError::Corrupt;
+    Ok(match r.u8()? {
+        0 => Shape::Sphere(Sphere::new(r.f32()?).map_err(bad)?),
+        1 => {
+            let (h, rad) = (r.f32()?, r.f32()?);
+            Shape::Capsule(Capsule::new(h, rad).map_err(bad)?)
+        }
+        2 => Shape::Cuboid(Cuboid::new(r.vec3()?).map_err(bad)?),
+        3 => Shape::Hull(hulls(r.u64()?).ok_or(SnapshotError::MissingHull)?),
+        4 => Shape::HalfSpace(HalfSpace::new(r.vec3()?).map_err(bad)?),
+        5 => {
+            let (a, b, c) = (r.vec3()?, r.vec3()?, r.vec3()?);
+            Shape::Triangle(Triangle::new(a, b, c).map_err(bad)?)
+        }
+        _ => return Err(SnapshotError::Corrupt),
+    })
+}
+
+fn put_config(s: &mut impl Sink, c: &WorldConfig) {
+    s.vec3(c.gravity);
+    s.f32(c.dt);
+    s.u32(c.substeps);
+    s.u32(c.velocity_iterations);
+    s.u32(c.position_iterations);
+    for v in [
+        c.restitution_threshold,
+        c.slop,
+        c.projection_factor,
+        c.max_projection,
+        c.speculative_margin,
+        c.stick_speed,
+        c.sleep_linear_speed,
+        c.sleep_angular_speed,
+        c.sleep_time,
+    ] {
+        s.f32(v);
+    }
+    s.u8(c.sleep_enabled as u8);
+    for v in [
+        c.ccd_motion_fraction,
+        c.hit_event_speed,
+        c.max_linear_speed,
+        c.max_angular_speed,
+    ] {
+        s.f32(v);
+    }
+}
+
+fn get_config(r: &mut Reader<'_>) -> R<WorldConfig> {
+    let mut c = WorldConfig {
+        gravity: r.vec3()?,
+        dt: r.f32()?,
+        substeps: r.u32()?,
+        velocity_iterations: r.u32()?,
+        position_iterations: r.u32()?,
+        ..WorldConfig::DEFAULT
+    };
+    c.restitution_threshold = r.f32()?;
+    c.slop = r.f32()?;
+    c.projection_factor = r.f32()?;
+    c.max_projection = r.f32()?;
+    c.speculative_margin = r.f32()?;
+    c.stick_speed = r.f32()?;
+    c.sleep_linear_speed = r.f32()?;
+    c.sleep_angular_speed = r.f32()?;
+    c.sleep_time = r.f32()?;
+    c.sleep_enabled = r.bool()?;
+    c.ccd_motion_fraction = r.f32()?;
+    c.hit_event_speed = r.f32()?;
+    c.max_linear_speed = r.f32()?;
+    c.max_angular_speed = r.f32()?;
+    c.validate().map_err(|_| SnapshotError::Corrupt)?;
+    Ok(c)
+}
+
+fn put_material(s: &mut impl Sink, m: &Material) {
+    s.f32(m.restitution);
+    s.f32(m.static_friction);
+    s.f32(m.kinetic_friction);
+}
+
+fn get_material(r: &mut Reader<'_>) -> R<Material> {
+    let m = Material {
+        restitution: r.f32()?,
+        static_friction: r.f32()?,
+        kinetic_friction: r.f32()?,
+    };
+    m.validate().map_err(|_| SnapshotError::Corrupt)?;
+    Ok(m)
+}
+
+fn put_body(s: &mut impl Sink, b: &Body<'_>) {
+    put_shape(s, &b.shape);
+    s.u8(match b.kind {
+        BodyKind::Dynamic => 0,
+        BodyKind::Static => 1,
+        BodyKind::Kinematic => 2,
+    });
+    s.iso(&b.pose);
+    s.vec3(b.center_local);
+    s.vec3(b.linear_velocity);
+    s.vec3(b.angular_velocity);
+    s.vec3(b.force);
+    s.vec3(b.torque);
+    s.f32(b.inv_mass);
+    s.mat3(&b.inv_inertia_local);
+    s.mat3(&b.inv_inertia_world);
+    put_material(s, &b.material);
+    s.f32(b.linear_damping);
+    s.f32(b.angular_damping);
+    s.u32(b.group);
+    s.u32(b.mask);
+    s.u8(b.sensor as u8);
+    s.u8(b.ccd as u8);
+    s.u8(b.awake as u8);
+    s.f32(b.sleep_time);
+    s.u64(b.user_data);
+    s.iso(&b.pose0);
+    s.vec3(b.bounds.min);
+    s.vec3(b.bounds.max);
+}
+
+fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>) -> R<Body<'a>> {
+    let shape = get_shape(r, hulls)?;
+    let kind = match r.u8()? {
+        0 => BodyKind::Dynamic,
+        1 => BodyKind::Static,
+        2 => BodyKind::Kinematic,
+        _ => return Err(SnapshotError::Corrupt),
+    };
+    Ok(Body {
+        shape,
+        kind,
+        pose: r.iso()?,
+        center_local: r.vec3()?,
+        linear_velocity: r.vec3()?,
+        angular_velocity: r.vec3()?,
+        force: r.vec3()?,
+        torque: r.vec3()?,
+        inv_mass: r.f32()?,
+        inv_inertia_local: r.mat3()?,
+        inv_inertia_world: r.mat3()?,
+        material: get_material(r)?,
+        linear_damping: r.f32()?,
+        angular_damping: r.f32()?,
+        group: r.u32()?,
+        mask: r.u32()?,
+        sensor: r.bool()?,
+        ccd: r.bool()?,
+        awake: r.bool()?,
+        sleep_time: r.f32()?,
+        user_data: r.u64()?,
+        pose0: r.iso()?,
+        bounds: Aabb::new(r.vec3()?, r.vec3()?),
+    })
+}
+
+fn put_point(s: &mut impl Sink, p: &ContactPoint) {
+    s.u64(p.id);
+    s.vec3(p.local_a);
+    s.vec3(p.local_b);
+    s.f32(p.separation);
+    s.f32(p.normal_impulse);
+    s.vec3(p.tangent_impulse);
+    s.vec3(p.r_a);
+    s.vec3(p.r_b);
+    s.f32(p.normal_mass);
+    s.f32(p.tangent_mass[0]);
+    s.f32(p.tangent_mass[1]);
+    s.f32(p.restitution_velocity);
+    s.f32(p.approach_speed);
+    s.u8(p.sticking as u8);
+}
+
+fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
+    Ok(ContactPoint {
+        id: r.u64()?,
+        local_a: r.vec3()?,
+        local_b: r.vec3()?,
+        separation: r.f32()?,
+        normal_impulse: r.f32()?,
+        tangent_impulse: r.vec3()?,
+        r_a: r.vec3()?,
+        r_b: r.vec3()?,
+        normal_mass: r.f32()?,
+        tangent_mass: [r.f32()?, r.f32()?],
+        restitution_velocity: r.f32()?,
+        approach_speed: r.f32()?,
+        sticking: r.bool()?,
+    })
+}
+
+fn put_contact(s: &mut impl Sink, c: &Contact) {
+    s.u32(c.a);
+    s.u32(c.b);
+    s.vec3(c.normal);
+    s.vec3(c.tangents[0]);
+    s.vec3(c.tangents[1]);
+    s.u8(c.len);
+    for p in c.points.iter() {
+        put_point(s, p);
+    }
+    put_material(s, &c.material);
+    s.u8(c.sensor as u8);
+    s.u8(c.touching as u8);
+}
+
+fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
+    let (a, b) = (r.u32()?, r.u32()?);
+    let normal = r.vec3()?;
+    let tangents = [r.vec3()?, r.vec3()?];
+    let len = r.u8()?;
+    if len as usize > 4 || a >= b {
+        return Err(SnapshotError::Corrupt);
+    }
+    let mut points = [ContactPoint::default(); 4];
+    for p in points.iter_mut() {
+        *p = get_point(r)?;
+    }
+    Ok(Contact {
+        a,
+        b,
+        normal,
+        tangents,
+        len,
+        points,
+        material: get_material(r)?,
+        sensor: r.bool()?,
+        touching: r.bool()?,
+    })
+}
+
+impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
+    World<'a, BODIES, CONTACTS, EVENTS>
+{
+    /// A 64-bit checksum of the canonical dynamic state (see the module docs of
+    /// `dynamics::snapshot`): equal on two peers exactly when their simulations agree.
+    pub fn checksum(&self) -> u64 {
+        let mut f = Fnv::new();
+        f.u64(self.step_count);
+        for (i, b) in self.bodies.iter() {
+            f.u32(i as u32);
+            f.u32(self.bodies.generation(i));
+            hash_body_motion(&mut f, b);
+        }
+        for c in self.contacts.iter() {
+            f.u32(c.a);
+            f.u32(c.b);
+            f.vec3(c.normal);
+            f.u8(c.len);
+            for p in c.points.iter().take(c.len as usize) {
+                f.u64(p.id);
+                f.f32(p.normal_impulse);
+                f.vec3(p.tangent_impulse);
+            }
+        }
+        f.0
+    }
+
+    /// The checksum of one body's motion state (pose, velocities, sleep), to find the first
+    /// body two peers disagree on.
+    pub fn body_checksum(&self, h: crate::BodyHandle) -> Result<u64, Error> {
+        let b = self.bodies.get(h).ok_or(Error::StaleHandle)?;
+        let mut f = Fnv::new();
+        hash_body_motion(&mut f, b);
+        Ok(f.0)
+    }
+
+    fn put_payload(&self, s: &mut impl Sink) {
+        put_config(s, &self.config);
+        s.u64(self.step_count);
+        s.u32(self.bodies.high() as u32);
+        for i in 0..self.bodies.high() {
+            s.u32(self.bodies.generation(i));
+            match self.bodies.at(i) {
+                Some(b) => {
+                    s.u8(1);
+                    put_body(s, b);
+                }
+                None => s.u8(0),
+            }
+        }
+        s.u32(self.broad.order.len() as u32);
+        for slot in self.broad.order.iter() {
+            s.u32(*slot);
+        }
+        s.u32(self.contacts.len() as u32);
+        for c in self.contacts.iter() {
+            put_contact(s, c);
+        }
+    }
+
+    /// Bytes [`World::snapshot`] needs for the current state.
+    pub fn snapshot_len(&self) -> usize {
+        let mut c = Counter(0);
+        self.put_payload(&mut c);
+        HEADER_LEN + c.0
+    }
+
+    /// The most bytes a snapshot of this world type can need (every slot used by the
+    /// largest shape record, the contact pool full): size a static buffer with it.
+    pub fn max_snapshot_len() -> usize {
+        let mut body = Counter(0);
+        if let Ok(tri) = Shape::triangle(Vec3::ZERO, Vec3::X, Vec3::Y) {
+            if let Ok(b) = Body::from_desc(&crate::BodyDesc::fixed(tri)) {
+                put_body(&mut body, &b);
+            }
+        }
+        let mut contact = Counter(0);
+        put_contact(&mut contact, &Contact::default());
+        let mut config = Counter(0);
+        put_config(&mut config, &WorldConfig::DEFAULT);
+        HEADER_LEN
+            + config.0
+            + 8 // step counter
+            + 4 + BODIES * (4 + 1 + body.0) // slots
+            + 4 + BODIES * 4 // broad-phase order
+            + 4 + CONTACTS * contact.0
+    }
+
+    /// Write the dynamic state into `buf`; returns the bytes written. Fails with
+    /// `BufferTooSmall(needed)` (nothing meaningful written) when `buf` is too short.
+    pub fn snapshot(&self, buf: &mut [u8]) -> Result<usize, Error> {
+        let needed = self.snapshot_len();
+        if buf.len() < needed {
+            return Err(Error::BufferTooSmall(needed as u32));
+        }
+        let (head, body) = buf.split_at_mut(HEADER_LEN);
+        let mut w = Writer { buf: body, pos: 0 };
+        self.put_payload(&mut w);
+        let payload_len = w.pos;
+        let mut f = Fnv::new();
+        f.put(body.get(..payload_len).unwrap_or(&[]));
+        let mut hw = Writer { buf: head, pos: 0 };
+        hw.put(&MAGIC);
+        hw.u16(FORMAT_VERSION);
+        hw.u8(MATH_BACKEND);
+        hw.u8(0);
+        hw.u32(BODIES as u32);
+        hw.u32(CONTACTS as u32);
+        hw.u32(EVENTS as u32);
+        hw.u32(payload_len as u32);
+        hw.u64(f.0);
+        Ok(HEADER_LEN + payload_len)
+    }
+
+    /// Replace the dynamic state with a snapshot's. Hull shapes are looked up among the
+    /// hulls this world's bodies use now. On any error the world is unchanged.
+    pub fn restore(&mut self, buf: &[u8]) -> Result<(), Error> {
+        self.restore_with_hulls(buf, &[])
+    }
+
+    /// [`World::restore`], also looking hull shapes up in `hulls`.
+    pub fn restore_with_hulls(&mut self, buf: &[u8], hulls: &'a [ConvexHull]) -> Result<(), Error> {
+        let payload = check_header::<BODIES, CONTACTS, EVENTS>(buf).map_err(Error::Snapshot)?;
+        // The hulls the world already references, plus the caller's.
+        let current = self.clone_hull_refs();
+        let lookup = |fp: u64| -> Option<&'a ConvexHull> {
+            current
+                .iter()
+                .flatten()
+                .copied()
+                .chain(hulls.iter())
+                .find(|h| hull_fingerprint(h) == fp)
+        };
+        // Pass 1: validate everything without touching the world.
+        self.read_payload(payload, &lookup, false)
+            .map_err(Error::Snapshot)?;
+        // Pass 2: the same reads, now applied. Cannot fail after pass 1.
+        self.read_payload(payload, &lookup, true)
+            .map_err(Error::Snapshot)?;
+        self.events.clear();
+        self.pairs.clear();
+        Ok(())
+    }
+
+    /// Up to 64 distinct hulls referenced by bodies (enough for restore lookups).
+    fn clone_hull_refs(&self) -> [Option<&'a ConvexHull>; 64] {
+        let mut out: [Option<&'a ConvexHull>; 64] = [None; 64];
+        let mut n = 0;
+        for (_, b) in self.bodies.iter() {
+            if let Shape::Hull(h) = b.shape {
+                if !out.iter().flatten().any(|x| core::ptr::eq(*x, h)) {
+                    if let Some(slot) = out.get_mut(n) {
+                        *slot = Some(h);
+                        n += 1;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    fn read_payload(
+        &mut self,
+        payload: &[u8],
+        hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>,
+        apply: bool,
+    ) -> R<()> {
+        let mut r = Reader {
+            buf: payload,
+            pos: 0,
+        };
+        let config = get_config(&mut r)?;
+        let step_count = r.u64()?;
+        let high = r.u32()? as usize;
+        if high > BODIES {
+            return Err(SnapshotError::Corrupt);
+        }
+        let mut live = [false; BODIES];
+        if apply {
+            self.bodies = super::pool::Pool::new();
+            self.config = config;
+            self.step_count = step_count;
+        }
+        for (i, is_live) in live.iter_mut().enumerate().take(high) {
+            let generation = r.u32()?;
+            let body = if r.bool()? {
+                *is_live = true;
+                Some(get_body(&mut r, hulls)?)
+            } else {
+                None
+            };
+            if apply {
+                self.bodies.set_slot(i, generation, body);
+            }
+        }
+        let n_order = r.u32()? as usize;
+        if n_order > BODIES {
+            return Err(SnapshotError::Corrupt);
+        }
+        if apply {
+            self.broad.order.clear();
+        }
+        for _ in 0..n_order {
+            let slot = r.u32()?;
+            if !live.get(slot as usize).copied().unwrap_or(false) {
+                return Err(SnapshotError::Corrupt);
+            }
+            if apply && self.broad.order.push(slot).is_err() {
+                return Err(SnapshotError::Corrupt);
+            }
+        }
+        let n_contacts = r.u32()? as usize;
+        if n_contacts > CONTACTS {
+            return Err(SnapshotError::Capacity);
+        }
+        if apply {
+            self.contacts.clear();
+        }
+        let mut last_key = None;
+        for _ in 0..n_contacts {
+            let c = get_contact(&mut r)?;
+            let alive = |s: u32| live.get(s as usize).copied().unwrap_or(false);
+            if !alive(c.a) || !alive(c.b) || last_key.is_some_and(|k| k >= c.key()) {
+                return Err(SnapshotError::Corrupt);
+            }
+            last_key = Some(c.key());
+            if apply && self.contacts.push(c).is_err() {
+                return Err(SnapshotError::Capacity);
+            }
+        }
+        if r.pos != payload.len() {
+            return Err(SnapshotError::Corrupt);
+        }
+        Ok(())
+    }
+}
+
+/// The motion state of a body, hashed.
+fn hash_body_motion(f: &mut Fnv, b: &Body<'_>) {
+    f.iso(&b.pose);
+    f.vec3(b.linear_velocity);
+    f.vec3(b.angular_velocity);
+    f.u8(b.awake as u8);
+    f.f32(b.sleep_time);
+}
+
+/// Check the header; returns the payload.
+fn check_header<const B: usize, const C: usize, const E: usize>(buf: &[u8]) -> R<&[u8]> {
+    let mut r = Reader { buf, pos: 0 };
+    if r.take::<8>()? != MAGIC {
+        return Err(SnapshotError::BadMagic);
+    }
+    if r.u16()? != FORMAT_VERSION {
+        return Err(SnapshotError::Version);
+    }
+    if r.u8()? != MATH_BACKEND {
+        return Err(SnapshotError::MathBackend);
+    }
+    let _reserved = r.u8()?;
+    if r.u32()? as usize != B || r.u32()? as usize != C || r.u32()? as usize != E {
+        return Err(SnapshotError::Capacity);
+    }
+    let len = r.u32()? as usize;
+    let sum = r.u64()?;
+    let payload = buf
+        .get(HEADER_LEN..HEADER_LEN + len)
+        .ok_or(SnapshotError::Truncated)?;
+    let mut f = Fnv::new();
+    f.put(payload);
+    if f.0 != sum {
+        return Err(SnapshotError::Checksum);
+    }
+    Ok(payload)
+}

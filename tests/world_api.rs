@@ -1,0 +1,241 @@
+//! The world's doors: every bad input returns its exact error and leaves the world
+//! unchanged; full pools and stale handles are errors, never panics.
+
+use carom::{
+    BodyDesc, BodyKind, Error, Input, Iso, Material, Pool, Quat, Shape, Vec3, World, WorldConfig,
+};
+
+type W = World<'static, 8, 32>;
+
+fn ball() -> Shape<'static> {
+    Shape::sphere(0.5).unwrap()
+}
+
+fn small_world() -> W {
+    let mut w = W::new();
+    w.add(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    )
+    .unwrap();
+    w.add(BodyDesc::dynamic(ball()).position(Vec3::new(0.0, 1.0, 0.0)))
+        .unwrap();
+    w
+}
+
+/// Apply `f`, expect `err`, and check the world's checksum and body count did not move.
+fn refused(w: &mut W, err: Error, f: impl FnOnce(&mut W) -> Result<(), Error>) {
+    let (sum, n) = (w.checksum(), w.body_count());
+    assert_eq!(f(w), Err(err));
+    assert_eq!(w.checksum(), sum, "world changed after {err:?}");
+    assert_eq!(w.body_count(), n);
+}
+
+#[test]
+fn bad_body_descriptions_are_refused_with_their_error() {
+    let mut w = small_world();
+    let nan = f32::NAN;
+    let cases: [(BodyDesc<'static>, Error); 10] = [
+        (
+            BodyDesc::dynamic(ball()).position(Vec3::new(nan, 0.0, 0.0)),
+            Error::NonFinite(Input::Position),
+        ),
+        (
+            BodyDesc::dynamic(ball()).rotation(Quat::from_xyzw(0.0, 0.0, 0.0, 2.0)),
+            Error::NotUnit(Input::Rotation),
+        ),
+        (
+            BodyDesc::dynamic(ball()).rotation(Quat::from_xyzw(nan, 0.0, 0.0, 1.0)),
+            Error::NonFinite(Input::Rotation),
+        ),
+        (
+            BodyDesc::dynamic(ball()).velocity(Vec3::new(0.0, f32::INFINITY, 0.0)),
+            Error::NonFinite(Input::LinearVelocity),
+        ),
+        (
+            BodyDesc::dynamic(ball()).angular_velocity(Vec3::splat(nan)),
+            Error::NonFinite(Input::AngularVelocity),
+        ),
+        (
+            BodyDesc::dynamic(ball()).density(-1.0),
+            Error::NotPositive(Input::Density),
+        ),
+        (
+            BodyDesc::dynamic(ball()).mass(0.0),
+            Error::NotPositive(Input::Mass),
+        ),
+        (
+            BodyDesc::dynamic(ball()).material(Material {
+                restitution: 1.5,
+                ..Material::DEFAULT
+            }),
+            Error::OutOfRange(Input::Material),
+        ),
+        (
+            BodyDesc::dynamic(ball()).damping(-0.1, 0.0),
+            Error::Negative(Input::Damping),
+        ),
+        (
+            BodyDesc::dynamic(Shape::half_space(Vec3::Y).unwrap()),
+            Error::StaticOnly,
+        ),
+    ];
+    for (desc, err) in cases {
+        refused(&mut w, err, |w| w.add(desc).map(|_| ()));
+    }
+}
+
+#[test]
+fn full_body_pool_is_an_error_and_changes_nothing() {
+    let mut w = small_world();
+    for i in 0..6 {
+        w.add(BodyDesc::dynamic(ball()).position(Vec3::new(i as f32 * 2.0, 3.0, 0.0)))
+            .unwrap();
+    }
+    assert_eq!(w.body_count(), 8);
+    refused(&mut w, Error::PoolFull(Pool::Bodies), |w| {
+        w.add(BodyDesc::dynamic(ball())).map(|_| ())
+    });
+    // The world goes on.
+    w.step();
+    assert_eq!(w.body_count(), 8);
+}
+
+#[test]
+fn stale_handles_are_refused_everywhere() {
+    let mut w = small_world();
+    let h = w
+        .add(BodyDesc::dynamic(ball()).position(Vec3::new(3.0, 1.0, 0.0)))
+        .unwrap();
+    w.remove(h).unwrap();
+    assert_eq!(w.remove(h), Err(Error::StaleHandle));
+    assert!(matches!(w.body(h), Err(Error::StaleHandle)));
+    refused(&mut w, Error::StaleHandle, |w| w.set_pose(h, Iso::IDENTITY));
+    refused(&mut w, Error::StaleHandle, |w| {
+        w.set_linear_velocity(h, Vec3::X)
+    });
+    refused(&mut w, Error::StaleHandle, |w| {
+        w.apply_impulse_at(h, Vec3::X, Vec3::ZERO)
+    });
+    refused(&mut w, Error::StaleHandle, |w| w.wake(h));
+    // The slot is reused with a new generation; the old handle stays stale.
+    let h2 = w.add(BodyDesc::dynamic(ball())).unwrap();
+    assert_eq!(h2.index, h.index);
+    assert_ne!(h2.generation, h.generation);
+    assert!(w.body(h).is_err());
+    assert!(w.body(h2).is_ok());
+}
+
+#[test]
+fn bad_setter_values_are_refused() {
+    let mut w = small_world();
+    let h = w.handles().nth(1).unwrap();
+    let bad_pose = Iso::new(Vec3::ZERO, Quat::from_xyzw(1.0, 1.0, 0.0, 0.0));
+    refused(&mut w, Error::NotUnit(Input::Rotation), |w| {
+        w.set_pose(h, bad_pose)
+    });
+    refused(&mut w, Error::NonFinite(Input::LinearVelocity), |w| {
+        w.set_linear_velocity(h, Vec3::new(f32::NAN, 0.0, 0.0))
+    });
+    refused(&mut w, Error::NonFinite(Input::Force), |w| {
+        w.apply_force(h, Vec3::splat(f32::INFINITY))
+    });
+    refused(&mut w, Error::NonFinite(Input::Position), |w| {
+        w.apply_impulse_at(h, Vec3::X, Vec3::new(0.0, f32::NAN, 0.0))
+    });
+    refused(&mut w, Error::Negative(Input::Material), |w| {
+        w.set_material(
+            h,
+            Material {
+                restitution: -2.0,
+                ..Material::DEFAULT
+            },
+        )
+    });
+}
+
+#[test]
+fn bad_configs_are_refused_and_the_old_one_kept() {
+    let mut w = small_world();
+    let bad = [
+        (
+            WorldConfig {
+                dt: 0.0,
+                ..WorldConfig::DEFAULT
+            },
+            Error::NotPositive(Input::Time),
+        ),
+        (
+            WorldConfig {
+                dt: f32::NAN,
+                ..WorldConfig::DEFAULT
+            },
+            Error::NonFinite(Input::Time),
+        ),
+        (
+            WorldConfig {
+                substeps: 0,
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Iterations),
+        ),
+        (
+            WorldConfig {
+                gravity: Vec3::splat(f32::NAN),
+                ..WorldConfig::DEFAULT
+            },
+            Error::NonFinite(Input::Gravity),
+        ),
+        (
+            WorldConfig {
+                projection_factor: 1.5,
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Config),
+        ),
+    ];
+    for (cfg, err) in bad {
+        assert_eq!(w.set_config(cfg), Err(err));
+        assert_eq!(*w.config(), WorldConfig::DEFAULT);
+        assert!(matches!(W::with_config(cfg), Err(e) if e == err));
+    }
+}
+
+#[test]
+fn static_bodies_never_move_and_report_infinite_mass() {
+    let mut w = small_world();
+    let ground = w.handles().next().unwrap();
+    w.set_linear_velocity(ground, Vec3::X).unwrap();
+    for _ in 0..10 {
+        w.step();
+    }
+    let g = w.body(ground).unwrap();
+    assert_eq!(g.kind(), BodyKind::Static);
+    assert_eq!(g.position(), Vec3::new(0.0, -0.5, 0.0));
+    assert_eq!(g.mass(), f32::INFINITY);
+}
+
+#[test]
+fn free_fall_matches_the_integrator_exactly() {
+    // Semi-implicit Euler: v_n = -g n dt, y_n = y0 - g dt² n(n+1)/2. No contact in reach.
+    let mut w = W::new();
+    let h = w
+        .add(BodyDesc::dynamic(ball()).position(Vec3::new(0.0, 100.0, 0.0)))
+        .unwrap();
+    let (g, dt) = (9.81f32, 1.0f32 / 60.0);
+    for _ in 0..60 {
+        w.step();
+    }
+    let b = w.body(h).unwrap();
+    let n = 60.0;
+    assert!((b.linear_velocity().y + g * dt * n).abs() < 1e-3);
+    let y = 100.0 - g * dt * dt * n * (n + 1.0) / 2.0;
+    assert!(
+        (b.position().y - y).abs() < 1e-3,
+        "{} vs {y}",
+        b.position().y
+    );
+    // Mass of a 0.5 m ball of water.
+    let m = 1000.0 * 4.0 / 3.0 * core::f32::consts::PI * 0.125;
+    assert!((b.mass() - m).abs() / m < 1e-5);
+}
