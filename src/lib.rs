@@ -36,6 +36,11 @@
 #[cfg(test)]
 extern crate std;
 
+/// The README's example, compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
 pub mod collide;
 pub mod config;
 pub mod dynamics;
@@ -48,7 +53,7 @@ pub mod shape;
 mod world;
 
 pub use config::WorldConfig;
-pub use dynamics::body::{BodyDesc, BodyKind, Material, MassSpec};
+pub use dynamics::body::{BodyDesc, BodyKind, MassSpec, Material};
 pub use dynamics::events::{Event, StepReport};
 pub use dynamics::BodyHandle;
 pub use error::{Error, HullError, Input, Pool, SnapshotError};

@@ -10,6 +10,13 @@ use crate::rng::SplitMix64;
 use crate::shape::{ConvexHull, Shape};
 use crate::World;
 
+/// The world type the reference scenes run in on every target (capacities are part of
+/// what a golden checksum means: drop rules depend on them).
+pub type ReferenceWorld<'a> = World<'a, 128, 512, 64>;
+
+/// Hulls the reference scenes use, built by [`make_hulls`] with [`SEED`].
+pub const REFERENCE_HULLS: usize = 8;
+
 /// Seed of every scene's jitter.
 pub const SEED: u64 = 0x00C0_FFEE_CA20_0001;
 
@@ -33,11 +40,17 @@ pub enum Scene {
     Bullet,
     /// A chaotic pile of mixed shapes in a walled box, 1000 steps (determinism).
     Mixed,
+    /// Reference scene: small fast spheres fired at thin walls and at each other in a
+    /// closed room, continuous collision at work, 1000 steps (determinism).
+    Bullets,
+    /// Reference scene: a tower of 10 boxes that comes to rest and sleeps, 1000 steps
+    /// (determinism).
+    Tower,
 }
 
 impl Scene {
     /// Every scene, in the order of SCENES.md.
-    pub const ALL: [Scene; 7] = [
+    pub const ALL: [Scene; 9] = [
         Scene::Pyramid20,
         Scene::Pyramid100,
         Scene::Boxes,
@@ -45,7 +58,13 @@ impl Scene {
         Scene::Hulls,
         Scene::Bullet,
         Scene::Mixed,
+        Scene::Bullets,
+        Scene::Tower,
     ];
+
+    /// The reference scenes whose checksums after their steps are kept in
+    /// `tests/golden/checksums.txt` and checked on every target.
+    pub const REFERENCE: [Scene; 3] = [Scene::Mixed, Scene::Bullets, Scene::Tower];
 
     /// The scene's name in SCENES.md.
     pub fn name(self) -> &'static str {
@@ -57,6 +76,8 @@ impl Scene {
             Scene::Hulls => "hulls",
             Scene::Bullet => "bullet",
             Scene::Mixed => "mixed",
+            Scene::Bullets => "bullets",
+            Scene::Tower => "tower",
         }
     }
 
@@ -67,7 +88,7 @@ impl Scene {
             Scene::Pyramid100 => 200,
             Scene::Boxes | Scene::Spheres | Scene::Hulls => 300,
             Scene::Bullet => 60,
-            Scene::Mixed => 1000,
+            Scene::Mixed | Scene::Bullets | Scene::Tower => 1000,
         }
     }
 
@@ -81,6 +102,8 @@ impl Scene {
             Scene::Hulls => 1 + 500,
             Scene::Bullet => 2,
             Scene::Mixed => MIXED_WALLS + MIXED_BODIES,
+            Scene::Bullets => 6 + BULLETS,
+            Scene::Tower => 11,
         }
     }
 
@@ -100,7 +123,34 @@ impl Scene {
             Scene::Hulls => hull_pile(world, hulls),
             Scene::Bullet => bullet(world),
             Scene::Mixed => mixed(world, hulls),
+            Scene::Bullets => bullets(world),
+            Scene::Tower => tower(world, 10),
         }
+    }
+
+    /// The configuration the scene runs with: the default (sleep on, as behaviour tests
+    /// want), with zero gravity for `bullet`. Timing runs switch sleeping off.
+    pub fn config(self) -> crate::WorldConfig {
+        match self {
+            Scene::Bullet => bullet_config(),
+            _ => crate::WorldConfig::DEFAULT,
+        }
+    }
+
+    /// Build the scene into an empty `world`, configure it, step it [`Scene::steps`]
+    /// times and return [`World::checksum`]. The one routine the host tests, the
+    /// Cortex-M firmware and the WASM build all run for the golden checksums.
+    pub fn run<'a, const B: usize, const C: usize, const E: usize>(
+        self,
+        world: &mut World<'a, B, C, E>,
+        hulls: &'a [ConvexHull],
+    ) -> Result<u64, Error> {
+        world.set_config(self.config())?;
+        self.build(world, hulls)?;
+        for _ in 0..self.steps() {
+            world.step();
+        }
+        Ok(world.checksum())
     }
 }
 
@@ -320,4 +370,71 @@ pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
         first.get_or_insert(hnd);
     }
     first.ok_or(Error::OutOfRange(crate::Input::Config))
+}
+
+/// Bullets fired in the `bullets` scene.
+pub const BULLETS: usize = 12;
+
+/// `bullets`: a closed room (floor, ceiling and four walls 0.1 m thick, inner half-width
+/// 3 m) and [`BULLETS`] spheres of radius 0.05 fired from the centre at 150 to 400 m/s in
+/// seeded directions, the last two straight at each other. Returns the first bullet.
+pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+) -> Result<BodyHandle, Error> {
+    let t = 0.05; // half thickness
+    let slab_y = Shape::cuboid(Vec3::new(3.0 + 2.0 * t, t, 3.0 + 2.0 * t))?;
+    let slab_x = Shape::cuboid(Vec3::new(t, 3.0, 3.0))?;
+    let slab_z = Shape::cuboid(Vec3::new(3.0, 3.0, t))?;
+    for s in [-1.0f32, 1.0] {
+        world.add(BodyDesc::fixed(slab_y).position(Vec3::new(0.0, 3.0 + s * (3.0 + t), 0.0)))?;
+        world.add(BodyDesc::fixed(slab_x).position(Vec3::new(s * (3.0 + t), 3.0, 0.0)))?;
+        world.add(BodyDesc::fixed(slab_z).position(Vec3::new(0.0, 3.0, s * (3.0 + t))))?;
+    }
+    let ball = Shape::sphere(0.05)?;
+    let mut rng = SplitMix64::new(SEED ^ 0xB011E7);
+    let mut first = None;
+    for n in 0..BULLETS {
+        let (p, v) = if n + 2 >= BULLETS {
+            let s = if n + 2 == BULLETS { -1.0 } else { 1.0 };
+            (
+                Vec3::new(s * 2.0, 1.0, 0.5),
+                Vec3::new(-s * 300.0, 0.0, 0.0),
+            )
+        } else {
+            let dir = rng.unit_vector();
+            (
+                Vec3::new(
+                    rng.range(-1.0, 1.0),
+                    3.0 + rng.range(-1.0, 1.0),
+                    rng.range(-1.0, 1.0),
+                ),
+                dir * rng.range(150.0, 400.0),
+            )
+        };
+        let hnd = world.add(BodyDesc::dynamic(ball).position(p).velocity(v).material(
+            Material {
+                restitution: 0.5,
+                static_friction: 0.5,
+                kinetic_friction: 0.3,
+            },
+        ))?;
+        first.get_or_insert(hnd);
+    }
+    first.ok_or(Error::OutOfRange(crate::Input::Config))
+}
+
+/// `tower`: `height` boxes of half-extent 0.5 stacked on a ground box (top at y = 0),
+/// 1 cm apart so they settle. Returns the top box.
+pub fn tower<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+    height: u32,
+) -> Result<BodyHandle, Error> {
+    ground(world, Vec3::new(10.0, 0.5, 10.0))?;
+    let cube = Shape::cuboid(Vec3::splat(0.5))?;
+    let mut top = None;
+    for i in 0..height {
+        let y = 0.5 + i as f32 * 1.01;
+        top = Some(world.add(BodyDesc::dynamic(cube).position(Vec3::new(0.0, y, 0.0)))?);
+    }
+    top.ok_or(Error::OutOfRange(crate::Input::Config))
 }
