@@ -55,6 +55,7 @@ mod world;
 pub use config::WorldConfig;
 pub use dynamics::body::{BodyDesc, BodyKind, MassSpec, Material};
 pub use dynamics::events::{Event, StepReport};
+pub use dynamics::snapshot::{Stage, StepTrace};
 pub use dynamics::BodyHandle;
 pub use error::{Error, HullError, Input, Pool, SnapshotError};
 pub use math::{Aabb, Iso, Mat3, Quat, Vec3};

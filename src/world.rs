@@ -8,6 +8,7 @@ use crate::dynamics::broad_phase::{self, BroadPhase};
 use crate::dynamics::contact::{self, Contact};
 use crate::dynamics::events::{Event, StepReport};
 use crate::dynamics::pool::{BodyHandle, Pool};
+use crate::dynamics::snapshot::{Stage, StepTrace};
 use crate::dynamics::{ccd, projection, sleep, solver};
 use crate::error::{finite_vec, Error, Input, Pool as PoolKind};
 use crate::math::{Iso, Quat, Vec3};
@@ -91,37 +92,60 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 
     /// Advance the world by one fixed step of `config.dt` seconds.
-    ///
-    /// The pipeline, one call per stage (see DESIGN.md, "One fixed step"):
     pub fn step(&mut self) -> StepReport {
+        self.step_traced(None)
+    }
+
+    /// [`World::step`], recording a digest of the state after every stage into `trace`:
+    /// two peers that compare traces find the first stage where they diverge.
+    ///
+    /// The pipeline, one call per stage (DESIGN.md, "One fixed step"):
+    pub fn step_traced(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
         let cfg = self.config;
         let h = cfg.dt / cfg.substeps as f32;
         let mut report = StepReport::default();
         self.events.clear();
         for _ in 0..cfg.substeps {
-            self.integrate_velocities(h); // 1  gravity, forces, damping
-            broad_phase::update_bounds(&mut self.bodies, &cfg, h); // 2  movement bounds
-            self.broad
-                .find_pairs(&self.bodies, &mut self.pairs, &mut report); // 3  broad phase
-                                                                         // 4 mid phase: every shape is a single convex part, so a pair is one part pair.
+            // 1 integrate velocities: gravity, forces, damping
+            self.integrate_velocities(h);
+            self.trace(&mut trace, Stage::IntegrateVelocities);
+            // 2 movement bounds, 3 broad phase: sweep and prune -> candidate pairs
+            broad_phase::update_bounds(&mut self.bodies, &cfg, h);
+            let pairs = &mut self.pairs;
+            self.broad.find_pairs(&self.bodies, pairs, &mut report);
+            self.trace(&mut trace, Stage::BroadPhase);
+            // 4 mid phase: every shape is one convex part, so a pair is one part pair.
+            // 5 narrow phase and 6 contact cache: manifolds, matched, warm-started
+            let (contacts, scratch, events) =
+                (&mut self.contacts, &mut self.scratch, &mut self.events);
             contact::update_contacts(
-                // 5 narrow phase, 6 contact cache
-                &mut self.contacts,
-                &mut self.scratch,
+                contacts,
+                scratch,
                 &self.pairs,
                 &self.bodies,
                 &cfg,
-                &mut self.events,
+                events,
                 &mut report,
             );
-            solver::solve_velocities(&mut self.contacts, &mut self.bodies, &cfg, h); // 7
-            self.integrate_positions(h); // 8  x += v h, q += ½ ω q h
-            ccd::sweep_fast_bodies(&mut self.bodies, &self.pairs, &cfg, h, &mut report); // 9
-            projection::project(&self.contacts, &mut self.bodies, &cfg); // 10
+            self.trace(&mut trace, Stage::NarrowPhase);
+            // 7 velocity solve: normal and friction impulses
+            solver::solve_velocities(&mut self.contacts, &mut self.bodies, &cfg, h);
+            self.trace(&mut trace, Stage::Solve);
+            // 8 integrate positions: x += v h, q += ½ ω q h
+            self.integrate_positions(h);
+            self.trace(&mut trace, Stage::IntegratePositions);
+            // 9 continuous collision: time of impact for fast bodies
+            ccd::sweep_fast_bodies(&mut self.bodies, &self.pairs, &cfg, h, &mut report);
+            self.trace(&mut trace, Stage::Continuous);
+            // 10 projection: push out the penetration that remains
+            projection::project(&self.contacts, &mut self.bodies, &cfg);
+            self.trace(&mut trace, Stage::Projection);
         }
+        // 11 sleep: islands fall asleep and wake together
         report.awake_bodies =
-            sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg); // 11
+            sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg);
         self.step_count = self.step_count.wrapping_add(1);
+        self.trace(&mut trace, Stage::Sleep);
         self.report = report;
         report
     }

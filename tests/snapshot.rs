@@ -184,3 +184,25 @@ fn same_calls_in_the_same_order_give_the_same_world() {
         .unwrap();
     assert_ne!(c.checksum(), d.checksum());
 }
+
+#[test]
+fn a_trace_names_the_first_stage_and_body_that_differ() {
+    use carom::{Material, Stage, StepTrace};
+    let mut a = mixed();
+    for _ in 0..90 {
+        a.step();
+    }
+    let mut b = a.clone();
+    // Same state, but one resting body's friction differs on peer b: the peers agree
+    // until the velocity solve.
+    let h = a.handles().nth(scenes::MIXED_WALLS + 2).unwrap();
+    b.set_material(h, Material { restitution: 0.0, static_friction: 0.0, kinetic_friction: 0.0 })
+        .unwrap();
+    let (mut ta, mut tb) = (StepTrace::default(), StepTrace::default());
+    a.step_traced(Some(&mut ta));
+    b.step_traced(Some(&mut tb));
+    assert_eq!(ta.first_difference(&tb), Some(Stage::Solve));
+    // Per-body checksums then name the body (or its neighbours) that moved differently.
+    let differing: Vec<_> = a.handles().filter(|h| a.body_checksum(*h) != b.body_checksum(*h)).collect();
+    assert!(differing.contains(&h), "{differing:?}");
+}

@@ -721,6 +721,85 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 }
 
+/// A stage of the step, for [`StepTrace`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// 1: gravity, forces, damping.
+    IntegrateVelocities = 0,
+    /// 2–3: movement bounds and candidate pairs.
+    BroadPhase = 1,
+    /// 4–6: manifolds and the contact cache.
+    NarrowPhase = 2,
+    /// 7: velocity solve.
+    Solve = 3,
+    /// 8: position integration.
+    IntegratePositions = 4,
+    /// 9: continuous collision.
+    Continuous = 5,
+    /// 10: projection.
+    Projection = 6,
+    /// 11: sleep.
+    Sleep = 7,
+}
+
+impl Stage {
+    /// Number of stages traced.
+    pub const COUNT: usize = 8;
+    /// All stages, in step order.
+    pub const ALL: [Stage; Stage::COUNT] = [
+        Stage::IntegrateVelocities,
+        Stage::BroadPhase,
+        Stage::NarrowPhase,
+        Stage::Solve,
+        Stage::IntegratePositions,
+        Stage::Continuous,
+        Stage::Projection,
+        Stage::Sleep,
+    ];
+}
+
+/// Digests of the world state after each stage of one step (folded over sub-steps),
+/// filled by [`World::step_traced`]. The first stage whose digest differs between two
+/// peers is where they diverged; [`World::body_checksum`] then names the body.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct StepTrace {
+    /// One digest per [`Stage`], indexed by `stage as usize`.
+    pub digests: [u64; Stage::COUNT],
+}
+
+impl StepTrace {
+    /// The first stage whose digest differs from `other`'s, if any.
+    pub fn first_difference(&self, other: &StepTrace) -> Option<Stage> {
+        Stage::ALL
+            .iter()
+            .copied()
+            .find(|s| self.digests.get(*s as usize) != other.digests.get(*s as usize))
+    }
+}
+
+impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
+    World<'a, BODIES, CONTACTS, EVENTS>
+{
+    /// Fold the state after `stage` into `trace`, if tracing.
+    pub(crate) fn trace(&self, trace: &mut Option<&mut StepTrace>, stage: Stage) {
+        let Some(t) = trace.as_deref_mut() else {
+            return;
+        };
+        let mut f = Fnv::new();
+        f.u64(t.digests.get(stage as usize).copied().unwrap_or(0));
+        f.u64(self.checksum());
+        if stage == Stage::BroadPhase {
+            for (a, b) in self.pairs.iter() {
+                f.u32(*a);
+                f.u32(*b);
+            }
+        }
+        if let Some(d) = t.digests.get_mut(stage as usize) {
+            *d = f.0;
+        }
+    }
+}
+
 /// The motion state of a body, hashed.
 fn hash_body_motion(f: &mut Fnv, b: &Body<'_>) {
     f.iso(&b.pose);
