@@ -1,0 +1,63 @@
+//! A step of each standard scene (SCENES.md), sleeping off as timing runs require.
+//!
+//! `cargo bench --bench scenes` reports, per scene, the time of one step averaged over the
+//! scene's whole run (a fresh copy of the scene each sample).
+
+use std::time::{Duration, Instant};
+
+use carom::scenes::{self, Scene};
+use carom::{ConvexHull, Vec3, World, WorldConfig};
+use criterion::{criterion_group, Criterion};
+
+/// Large enough for pyramid100 and spheres.
+type BigWorld<'a> = World<'a, 5120, 24576, 64>;
+
+fn hulls() -> &'static [ConvexHull] {
+    let mut v = vec![ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap(); 64];
+    scenes::make_hulls(&mut v, scenes::SEED).unwrap();
+    Box::leak(v.into_boxed_slice())
+}
+
+fn bench_scenes(c: &mut Criterion) {
+    let hulls = hulls();
+    let mut group = c.benchmark_group("scene_step");
+    group.sample_size(10);
+    group.measurement_time(Duration::from_secs(20));
+    for scene in Scene::ALL {
+        let mut template: Box<BigWorld<'_>> = Box::new(World::new());
+        let cfg = WorldConfig { sleep_enabled: false, ..scene.config() };
+        template.set_config(cfg).unwrap();
+        scene.build(&mut template, hulls).unwrap();
+        let steps = scene.steps();
+        group.bench_function(scene.name(), |b| {
+            b.iter_custom(|iters| {
+                let mut total = Duration::ZERO;
+                for _ in 0..iters {
+                    let mut w = template.clone();
+                    let t0 = Instant::now();
+                    for _ in 0..steps {
+                        w.step();
+                    }
+                    total += t0.elapsed() / steps;
+                }
+                total
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_scenes);
+
+fn main() {
+    // Worlds live inline: give the benchmarks a big stack.
+    std::thread::Builder::new()
+        .stack_size(1 << 30)
+        .spawn(|| {
+            benches();
+            Criterion::default().configure_from_args().final_summary();
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}
