@@ -1,9 +1,14 @@
 //! Events of a step and the step report.
 //!
-//! Events are queued in a bounded buffer in the order the step produces them: contact
-//! events in pair order `(lower slot, higher slot)`, then hit events in the same order.
-//! When the queue is full, later events of the step are dropped and counted in
+//! Events are queued in a bounded buffer in the order the step produces them: for each
+//! sub-step, begin/end and sensor events in pair order `(lower slot, higher slot)`, then
+//! hit events in the same order. The queue is emptied at the start of every step. When it
+//! is full, later events of the step are dropped and counted in
 //! [`StepReport::dropped_events`].
+//!
+//! A contact *touches* when one of its points is within `WorldConfig::slop` of the other
+//! body (or penetrates it); closer than the speculative margin but further than the slop
+//! is a contact the solver uses that raises no event.
 
 use super::pool::BodyHandle;
 use crate::math::Vec3;
@@ -12,21 +17,23 @@ use crate::math::Vec3;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
-    /// Two bodies started touching (a contact point within the slop).
+    /// Two bodies started touching (a contact point within the slop). Neither is a sensor.
     ContactBegin {
         /// Body in the lower slot.
         a: BodyHandle,
         /// Body in the higher slot.
         b: BodyHandle,
     },
-    /// Two bodies stopped touching (or one was removed).
+    /// Two bodies stopped touching, or their contact went away (bounds apart, or dropped
+    /// for capacity). Removing a body with [`crate::World::remove`] sends no event.
     ContactEnd {
         /// Body in the lower slot.
         a: BodyHandle,
         /// Body in the higher slot.
         b: BodyHandle,
     },
-    /// A body started overlapping a sensor.
+    /// A body started overlapping a sensor (within the slop). When both are sensors,
+    /// `sensor` is the one in the lower slot.
     SensorEnter {
         /// The sensor.
         sensor: BodyHandle,
@@ -40,7 +47,11 @@ pub enum Event {
         /// The other body.
         other: BodyHandle,
     },
-    /// Two bodies hit each other faster than `WorldConfig::hit_event_speed`.
+    /// Two bodies hit each other faster than `WorldConfig::hit_event_speed`: sent for a
+    /// contact (never a sensor's) in the step it appears or starts touching, at its
+    /// fastest closing point. A contact usually appears a step early, within the
+    /// speculative margin, and the solver then stops the bodies before they touch, so the
+    /// speed is the one before that solve.
     Hit {
         /// Body in the lower slot.
         a: BodyHandle,
@@ -61,20 +72,23 @@ pub enum Event {
 pub struct StepReport {
     /// Awake dynamic bodies after the step.
     pub awake_bodies: u32,
-    /// Candidate pairs found by the broad phase.
+    /// Candidate pairs found by the broad phase (kept ones, last sub-step).
     pub pairs: u32,
-    /// Contacts (manifolds with at least one point) after the narrow phase.
+    /// Contacts (manifolds with at least one point) after the narrow phase, last
+    /// sub-step; includes contacts kept unchanged for sleeping bodies.
     pub contacts: u32,
-    /// Contact points over all contacts.
+    /// Contact points over all contacts (last sub-step).
     pub points: u32,
     /// Bodies swept by continuous collision.
     pub ccd_sweeps: u32,
     /// Sweeps that found a time of impact and moved a body back.
     pub ccd_hits: u32,
-    /// Candidate pairs dropped because the pair buffer was full (kept: the first pairs
-    /// in `(lower slot, higher slot)` order).
+    /// Candidate pairs dropped because the pair buffer was full, summed over the
+    /// sub-steps (kept: the first found by the sweep, which visits bodies by increasing
+    /// lower x bound of their movement bounds, ties by slot).
     pub dropped_pairs: u32,
-    /// Manifolds dropped because the contact pool was full (kept: the first in pair order).
+    /// Manifolds dropped because the contact pool was full, summed over the sub-steps
+    /// (kept: the first in `(lower slot, higher slot)` order).
     pub dropped_contacts: u32,
     /// Events dropped because the event queue was full (kept: the first of the step).
     pub dropped_events: u32,

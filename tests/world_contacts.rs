@@ -1,0 +1,468 @@
+//! Broad phase, contact cache and events of the world, through the public API only.
+//!
+//! Oracles: an O(n²) loop over all body pairs with `collide::movement_bounds` and
+//! `collide::contact` (the same stateless functions the step uses, so counts must match
+//! exactly), and scenes whose events follow from simple kinematics.
+
+use carom::collide::{contact, movement_bounds, Motion};
+use carom::rng::SplitMix64;
+use carom::{BodyDesc, BodyHandle, BodyKind, Event, Iso, Shape, Vec3, World, WorldConfig};
+
+fn zero_gravity() -> WorldConfig {
+    WorldConfig {
+        gravity: Vec3::ZERO,
+        ..WorldConfig::DEFAULT
+    }
+}
+
+fn sphere(r: f32) -> Shape<'static> {
+    Shape::sphere(r).unwrap()
+}
+
+/// A random convex shape: sphere, cuboid or capsule, 0.2 to 0.8 m.
+fn random_shape(rng: &mut SplitMix64) -> Shape<'static> {
+    match rng.next_u64() % 3 {
+        0 => Shape::sphere(rng.range(0.2, 0.8)).unwrap(),
+        1 => Shape::cuboid(Vec3::new(
+            rng.range(0.2, 0.8),
+            rng.range(0.2, 0.8),
+            rng.range(0.2, 0.8),
+        ))
+        .unwrap(),
+        _ => Shape::capsule(rng.range(0.1, 0.6), rng.range(0.2, 0.5)).unwrap(),
+    }
+}
+
+/// What the broad phase and narrow phase must find for the world as it is now, by brute
+/// force: (candidate pairs, contacts, points, touching pairs).
+fn brute_force<const B: usize, const C: usize, const E: usize>(
+    world: &World<'_, B, C, E>,
+) -> (usize, usize, usize, Vec<(BodyHandle, BodyHandle)>) {
+    let cfg = *world.config();
+    let h = cfg.dt / cfg.substeps as f32;
+    let handles: Vec<BodyHandle> = world.handles().collect();
+    let bounds = |hd: BodyHandle| {
+        let b = world.body(hd).unwrap();
+        let moving = b.kind() != BodyKind::Static && b.is_awake();
+        let motion = Motion {
+            pose: b.pose(),
+            // Velocity of the body origin: v + ω × (o − c).
+            linear: b.linear_velocity()
+                + b.angular_velocity()
+                    .cross(b.position() - b.center_of_mass()),
+            angular: b.angular_velocity(),
+        };
+        let aabb = if moving {
+            movement_bounds(&b.shape(), &motion, h)
+        } else {
+            b.shape().aabb(&b.pose())
+        };
+        aabb.expanded(cfg.speculative_margin)
+    };
+    let (mut pairs, mut contacts, mut points) = (0, 0, 0);
+    let mut touching = Vec::new();
+    for (i, &hi) in handles.iter().enumerate() {
+        for &hj in &handles[i + 1..] {
+            let (a, b) = (world.body(hi).unwrap(), world.body(hj).unwrap());
+            let some_dynamic = a.kind() == BodyKind::Dynamic || b.kind() == BodyKind::Dynamic;
+            if !some_dynamic || !(a.is_awake() || b.is_awake()) || !bounds(hi).overlaps(&bounds(hj))
+            {
+                continue;
+            }
+            pairs += 1;
+            let m = contact(
+                &a.shape(),
+                &a.pose(),
+                &b.shape(),
+                &b.pose(),
+                cfg.speculative_margin,
+            )
+            .unwrap();
+            if let Some(m) = m.filter(|m| !m.points().is_empty()) {
+                contacts += 1;
+                points += m.points().len();
+                if m.min_separation() <= cfg.slop {
+                    touching.push((hi, hj));
+                }
+            }
+        }
+    }
+    (pairs, contacts, points, touching)
+}
+
+fn begins(events: &[Event]) -> Vec<(BodyHandle, BodyHandle)> {
+    events
+        .iter()
+        .filter_map(|e| match *e {
+            Event::ContactBegin { a, b } => Some((a, b)),
+            _ => None,
+        })
+        .collect()
+}
+
+fn count(events: &[Event], pred: impl Fn(&Event) -> bool) -> usize {
+    events.iter().filter(|e| pred(e)).count()
+}
+
+/// Random crowded scenes, no gravity, at rest: after one step, pair, contact and point
+/// counts and the begin events equal the brute-force answer exactly. A second step (the
+/// solver has pushed overlapping bodies apart, so they move) checks the incrementally
+/// re-sorted order against the same oracle with movement bounds.
+#[test]
+fn pairs_and_contacts_match_brute_force() {
+    for seed in 1..=6u64 {
+        let mut rng = SplitMix64::new(seed);
+        let mut world: World<48, 256, 256> = World::with_config(zero_gravity()).unwrap();
+        for _ in 0..40 {
+            let shape = random_shape(&mut rng);
+            let p = Vec3::new(
+                rng.range(-3.0, 3.0),
+                rng.range(-3.0, 3.0),
+                rng.range(-3.0, 3.0),
+            );
+            let desc = if rng.next_u64().is_multiple_of(4) {
+                BodyDesc::fixed(shape)
+            } else {
+                BodyDesc::dynamic(shape)
+            };
+            world
+                .add(desc.position(p).rotation(rng.rotation()))
+                .unwrap();
+        }
+        for step in 0..2 {
+            let (pairs, contacts, points, touching) = brute_force(&world);
+            let report = world.step();
+            assert!(contacts > 5, "seed {seed}: scene too sparse to test");
+            assert_eq!(report.pairs as usize, pairs, "seed {seed} step {step}");
+            assert_eq!(
+                report.contacts as usize, contacts,
+                "seed {seed} step {step}"
+            );
+            assert_eq!(world.contact_count(), contacts, "seed {seed} step {step}");
+            assert_eq!(report.points as usize, points, "seed {seed} step {step}");
+            assert!(!report.overflowed(), "seed {seed} step {step}: {report:?}");
+            if step == 0 {
+                // Every touching pair is new: one begin each, in (lower slot, higher slot)
+                // order.
+                assert_eq!(begins(world.events()), touching, "seed {seed}");
+            }
+        }
+    }
+}
+
+/// Group/mask filtering, static-static and sleeping-sleeping pairs: three overlapping
+/// spheres where only A-B may collide, two overlapping static boxes, and two overlapping
+/// sleeping spheres.
+#[test]
+fn filters_decide_which_pairs_are_tested() {
+    let mut world: World<16, 32> = World::with_config(zero_gravity()).unwrap();
+    let a = world
+        .add(BodyDesc::dynamic(sphere(0.5)).filter(0b001, 0b010))
+        .unwrap();
+    let b = world
+        .add(
+            BodyDesc::dynamic(sphere(0.5))
+                .position(Vec3::new(0.5, 0.0, 0.0))
+                .filter(0b010, 0b001),
+        )
+        .unwrap();
+    // C sees everybody, but neither A nor B sees group 0b100.
+    world
+        .add(
+            BodyDesc::dynamic(sphere(0.5))
+                .position(Vec3::new(0.25, 0.5, 0.0))
+                .filter(0b100, u32::MAX),
+        )
+        .unwrap();
+    let cube = Shape::cuboid(Vec3::splat(1.0)).unwrap();
+    world
+        .add(BodyDesc::fixed(cube).position(Vec3::new(10.0, 0.0, 0.0)))
+        .unwrap();
+    world
+        .add(BodyDesc::fixed(cube).position(Vec3::new(10.5, 0.0, 0.0)))
+        .unwrap();
+    let s1 = world
+        .add(BodyDesc::dynamic(sphere(0.5)).position(Vec3::new(-10.0, 0.0, 0.0)))
+        .unwrap();
+    let s2 = world
+        .add(BodyDesc::dynamic(sphere(0.5)).position(Vec3::new(-10.5, 0.0, 0.0)))
+        .unwrap();
+    world.sleep(s1).unwrap();
+    world.sleep(s2).unwrap();
+    let report = world.step();
+    assert_eq!(report.pairs, 1);
+    assert_eq!(world.contact_count(), 1);
+    assert_eq!(begins(world.events()), vec![(a, b)]);
+    // Waking one of the sleepers makes its pair count again.
+    world.wake(s1).unwrap();
+    let report = world.step();
+    assert_eq!(report.pairs, 2);
+    assert_eq!(begins(world.events()), vec![(s1, s2)]);
+}
+
+/// A ball dropped 1 m onto a box: one begin, one hit at about `√(2 g h)`, no end while it
+/// rests (and sleeps) for 4 s; teleported away, one end event.
+#[test]
+fn landing_ball_begins_once_and_ends_when_lifted() {
+    let mut world: World<8, 16> = World::new();
+    let ground = world
+        .add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+    let ball = world
+        .add(BodyDesc::dynamic(sphere(0.5)).position(Vec3::new(0.0, 1.5, 0.0)))
+        .unwrap();
+    let mut all = Vec::new();
+    for _ in 0..240 {
+        world.step();
+        all.extend_from_slice(world.events());
+    }
+    assert_eq!(begins(&all), vec![(ground, ball)]);
+    assert_eq!(count(&all, |e| matches!(e, Event::ContactEnd { .. })), 0);
+    let hits: Vec<f32> = all
+        .iter()
+        .filter_map(|e| match *e {
+            Event::Hit {
+                a,
+                b,
+                speed,
+                normal,
+                ..
+            } => {
+                assert_eq!((a, b), (ground, ball));
+                assert!((normal - Vec3::Y).length() < 1e-4, "normal {normal:?}");
+                Some(speed)
+            }
+            _ => None,
+        })
+        .collect();
+    // √(2 · 9.81 · 1) = 4.43 m/s. The hit is measured up to one step (2 cm margin and
+    // 7 cm of fall) early or late: ±0.3 m/s covers a step of gravity and the margin.
+    assert_eq!(hits.len(), 1, "{hits:?}");
+    assert!((hits[0] - 4.43).abs() < 0.3, "hit speed {}", hits[0]);
+    let y = world.body(ball).unwrap().position().y;
+    assert!((y - 0.5).abs() < 0.02, "ball rests at y = {y}");
+
+    world
+        .set_pose(ball, Iso::from_position(Vec3::new(0.0, 5.0, 0.0)))
+        .unwrap();
+    world.step();
+    assert_eq!(world.events(), &[Event::ContactEnd { a: ground, b: ball }]);
+    assert_eq!(world.contact_count(), 0);
+}
+
+/// A ball at 3 m/s (5 cm per step, no gravity) whose contact first appears as a
+/// speculative one, 1.5 cm above the ground (between the 0.5 cm slop and the 2 cm margin):
+/// the hit is reported then, at the full 3 m/s, because the solver stops the ball before
+/// it touches. One hit, then one begin when it touches, nothing more while it rests.
+#[test]
+fn hit_is_reported_when_a_speculative_contact_appears() {
+    let mut world: World<4, 8> = World::with_config(zero_gravity()).unwrap();
+    let ground = world
+        .add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+    // Gaps at the start of each step: 0.215, 0.165, 0.115, 0.065, 0.015 (speculative).
+    let ball = world
+        .add(
+            BodyDesc::dynamic(sphere(0.5))
+                .position(Vec3::new(0.0, 0.715, 0.0))
+                .velocity(Vec3::new(0.0, -3.0, 0.0)),
+        )
+        .unwrap();
+    let mut hit_step = None;
+    let mut begin_step = None;
+    for k in 0..60 {
+        world.step();
+        for e in world.events() {
+            match *e {
+                Event::Hit { a, b, speed, .. } => {
+                    assert_eq!((a, b, hit_step), (ground, ball, None), "step {k}");
+                    // (v_a − v_b)·n = (0 − (−3))·(+Y): exact up to the f32 velocity.
+                    assert!((speed - 3.0).abs() < 1e-5, "speed {speed}");
+                    hit_step = Some(k);
+                }
+                Event::ContactBegin { a, b } => {
+                    assert_eq!((a, b, begin_step), (ground, ball, None), "step {k}");
+                    begin_step = Some(k);
+                }
+                other => panic!("step {k}: unexpected {other:?}"),
+            }
+        }
+    }
+    assert_eq!(
+        hit_step,
+        Some(4),
+        "the fifth step starts 1.5 cm above the ground"
+    );
+    assert!(begin_step.is_some_and(|b| b > 4), "begin at {begin_step:?}");
+}
+
+/// A ball moving at 3 m/s straight through a static sensor box: enter once, exactly at
+/// the step it comes within the slop; leave once, at the step it is more than the slop
+/// below; no contact events, and its path is bit-identical to the same ball in a world
+/// without the sensor.
+#[test]
+fn sensor_reports_enter_and_leave_without_pushing() {
+    let cfg = zero_gravity();
+    let mut world: World<4, 8> = World::with_config(cfg).unwrap();
+    let mut twin: World<4, 8> = World::with_config(cfg).unwrap();
+    let sensor = world
+        .add(BodyDesc::fixed(Shape::cuboid(Vec3::splat(1.0)).unwrap()).sensor(true))
+        .unwrap();
+    let desc = BodyDesc::dynamic(sphere(0.25))
+        .position(Vec3::new(0.0, 3.0, 0.0))
+        .velocity(Vec3::new(0.0, -3.0, 0.0));
+    let ball = world.add(desc).unwrap();
+    let twin_ball = twin.add(desc).unwrap();
+    let (mut entered, mut left) = (None, None);
+    for k in 0..120 {
+        let y = world.body(ball).unwrap().position().y;
+        world.step();
+        twin.step();
+        let (p, q) = (
+            world.body(ball).unwrap().pose(),
+            twin.body(twin_ball).unwrap().pose(),
+        );
+        assert_eq!(p, q, "step {k}: the sensor pushed the ball");
+        for e in world.events() {
+            match *e {
+                Event::SensorEnter { sensor: s, other } => {
+                    assert_eq!((s, other, entered), (sensor, ball, None));
+                    entered = Some(y);
+                }
+                Event::SensorLeave { sensor: s, other } => {
+                    assert_eq!((s, other, left), (sensor, ball, None));
+                    assert!(entered.is_some());
+                    left = Some(y);
+                }
+                other => panic!("unexpected event {other:?}"),
+            }
+        }
+        // Touching means a gap of at most the slop: above, `y − 0.25 − 1 <= slop`; below,
+        // `−1 − (y + 0.25) <= slop`. Positions are 5 cm apart, so a step is never
+        // borderline.
+        let touching_now = y - 1.25 <= cfg.slop && -1.25 - y <= cfg.slop;
+        assert_eq!(
+            entered.is_some() && left.is_none(),
+            touching_now,
+            "step {k}, y = {y}"
+        );
+    }
+    assert!(entered.is_some() && left.is_some());
+}
+
+/// Three events fit a queue of 2: the first two in pair order are kept, one is counted.
+#[test]
+fn event_overflow_is_counted_and_the_world_goes_on() {
+    let mut world: World<8, 16, 2> = World::with_config(zero_gravity()).unwrap();
+    let ground = world
+        .add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+    let balls: Vec<BodyHandle> = (0..5)
+        .map(|i| {
+            let p = Vec3::new(2.0 * i as f32, 0.49, 0.0); // 1 cm deep
+            world
+                .add(BodyDesc::dynamic(sphere(0.5)).position(p))
+                .unwrap()
+        })
+        .collect();
+    let report = world.step();
+    assert_eq!(report.contacts, 5);
+    assert_eq!(report.dropped_events, 3);
+    assert!(report.overflowed());
+    assert_eq!(
+        world.events(),
+        &[
+            Event::ContactBegin {
+                a: ground,
+                b: balls[0]
+            },
+            Event::ContactBegin {
+                a: ground,
+                b: balls[1]
+            },
+        ]
+    );
+    for _ in 0..60 {
+        let r = world.step();
+        assert_eq!(r.contacts, 5);
+    }
+}
+
+/// Eight balls on a box with room for 4 pairs: the first four found by the sweep (by
+/// increasing x) are kept and four are counted, every step, without a panic.
+#[test]
+fn pair_overflow_keeps_first_in_sweep_order() {
+    let mut world: World<16, 4, 16> = World::with_config(zero_gravity()).unwrap();
+    let ground = world
+        .add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+    // Added right to left, so slot order and sweep order disagree.
+    let balls: Vec<BodyHandle> = (0..8)
+        .map(|i| {
+            let p = Vec3::new(14.0 - 2.0 * i as f32, 0.49, 0.0);
+            world
+                .add(BodyDesc::dynamic(sphere(0.5)).position(p))
+                .unwrap()
+        })
+        .collect();
+    for step in 0..30 {
+        let report = world.step();
+        assert_eq!((report.pairs, report.dropped_pairs), (4, 4), "step {step}");
+        assert_eq!(world.contact_count(), 4);
+        if step == 0 {
+            // The four leftmost balls: added last.
+            let mut expected: Vec<_> = balls[4..].iter().map(|&b| (ground, b)).collect();
+            expected.sort();
+            assert_eq!(begins(world.events()), expected);
+        }
+    }
+}
+
+/// Contacts kept for sleeping bodies plus new pairs overflow the contact pool: the first
+/// four in pair order stay, one is counted; the new contact that did not fit sends no
+/// begin event.
+#[test]
+fn contact_overflow_is_counted_and_sleeping_contacts_survive() {
+    let mut world: World<16, 4, 16> = World::with_config(zero_gravity()).unwrap();
+    let ground = world
+        .add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+    let ball_at = |x: f32| BodyDesc::dynamic(sphere(0.5)).position(Vec3::new(x, 0.49, 0.0));
+    let sleepers: Vec<BodyHandle> = (0..3)
+        .map(|i| world.add(ball_at(2.0 * i as f32)).unwrap())
+        .collect();
+    world.step();
+    assert_eq!(world.contact_count(), 3);
+    for &s in &sleepers {
+        world.sleep(s).unwrap();
+    }
+    let late = world.add(ball_at(10.0)).unwrap();
+    world.add(ball_at(12.0)).unwrap();
+    let report = world.step();
+    assert_eq!(report.pairs, 2, "sleeping-static pairs are not tested");
+    assert_eq!(report.contacts, 4);
+    assert_eq!(report.dropped_contacts, 1);
+    assert_eq!(
+        world.events(),
+        &[Event::ContactBegin { a: ground, b: late }]
+    );
+    for _ in 0..60 {
+        world.step();
+    }
+    assert!(world.contact_count() <= 4);
+}
