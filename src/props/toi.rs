@@ -1,1 +1,206 @@
-//! Properties: toi.
+//! Properties of [`time_of_impact`] and [`movement_bounds`], checked against GJK distance
+//! sampled along the motions.
+
+use super::{check, Violation};
+use crate::collide::{distance, movement_bounds, time_of_impact, Motion, SimplexCache, Toi};
+use crate::math::{Iso, Vec3};
+use crate::shape::Shape;
+
+/// Times before a hit at which the shapes must be apart (no tunnelling).
+pub const TOI_EARLIER_SAMPLES: u32 = 64;
+
+/// Times in `[0, t_max]` at which separated shapes must be apart.
+pub const TOI_SEPARATED_SAMPLES: u32 = 256;
+
+/// Times in `[0, t_max]` at which a shape's box must lie in its movement bounds.
+pub const TOI_BOUNDS_SAMPLES: u32 = 100;
+
+/// Largest coordinate (m), speed (m/s), spin (rad/s) and shape size (m) for which the
+/// geometric properties are checked. Outside it `f32` GJK error grows past the slack
+/// below; only "no panic, time in range" is checked there.
+const WORKING_RANGE: f32 = 1.0e3;
+
+/// Most rotation (rad) of the two shapes together over `[0, t_max]` for which "no contact
+/// is missed" is checked: one turn. Time of impact's fallback march is measured to miss
+/// nothing up to about 20 rad (see `collide::toi`), so this leaves a margin of 3.
+const TURN_LIMIT: f32 = core::f32::consts::TAU;
+
+/// Relative GJK accuracy allowed when comparing a sampled gap with the tolerance: the
+/// sampled GJK starts cold while the query warm-starts, so they may differ by rounding.
+const GAP_SLACK: f32 = 1.0e-5;
+
+/// How far a reported normal may be from unit length.
+const UNIT_SLACK: f32 = 1.0e-3;
+
+/// Properties of `time_of_impact(a, motion_a, b, motion_b, t_max, tolerance)`:
+///
+/// - it never panics; a refused input is fine (the bad-input tests check the errors);
+/// - a hit time lies in `[0, t_max]`;
+/// - in the working range (coordinates, speeds, spins and sizes up to 1000, `t_max` up to
+///   10 s, `tolerance` in `[1e-4, 1]` m): a hit has a finite unit normal and finite
+///   points, and the shapes are apart at the hit time with a gap of at most `tolerance`
+///   (plus GJK slack); `Overlapping` means GJK distance 0 at time 0; each shape's box at
+///   [`TOI_BOUNDS_SAMPLES`] times in `[0, t_max]` lies in its [`movement_bounds`] over
+///   `t_max`;
+/// - when moreover the two shapes turn at most one turn in total over `[0, t_max]`: no
+///   contact is missed: [`TOI_EARLIER_SAMPLES`] times before a hit, or
+///   [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after `Separated`, show the shapes
+///   apart.
+pub fn toi_properties(
+    a: &Shape,
+    motion_a: &Motion,
+    b: &Shape,
+    motion_b: &Motion,
+    t_max: f32,
+    tolerance: f32,
+) -> Result<(), Violation> {
+    let Ok(toi) = time_of_impact(a, motion_a, b, motion_b, t_max, tolerance) else {
+        return Ok(());
+    };
+    if let Toi::Hit { time, .. } = toi {
+        check(
+            (0.0..=t_max).contains(&time),
+            "toi: hit time outside [0, t_max]",
+        )?;
+    }
+    if !in_working_range(a, motion_a, b, motion_b, t_max, tolerance) {
+        return Ok(());
+    }
+    bounds_hold(a, motion_a, t_max)?;
+    bounds_hold(b, motion_b, t_max)?;
+    let turn = (motion_a.angular.length() + motion_b.angular.length()) * t_max;
+    let spin_in_range = turn <= TURN_LIMIT;
+    let pair = Sampler {
+        a,
+        motion_a,
+        b,
+        motion_b,
+    };
+    match toi {
+        Toi::Hit {
+            time,
+            normal,
+            point_a,
+            point_b,
+        } => {
+            check(
+                normal.is_finite() && point_a.is_finite() && point_b.is_finite(),
+                "toi: hit normal or points not finite",
+            )?;
+            check(
+                (1.0 - UNIT_SLACK..=1.0 + UNIT_SLACK).contains(&normal.length()),
+                "toi: hit normal not unit length",
+            )?;
+            let gap = pair.gap_at(time)?;
+            let slack = GAP_SLACK * (1.0 + pair.scale(t_max));
+            check(gap > 0.0, "toi: shapes overlap at the hit time")?;
+            check(
+                gap <= tolerance + slack,
+                "toi: gap at the hit time exceeds the tolerance",
+            )?;
+            check(
+                point_a.distance(point_b) <= tolerance + slack,
+                "toi: hit points further apart than the tolerance",
+            )?;
+            if !spin_in_range {
+                return Ok(());
+            }
+            for k in 0..TOI_EARLIER_SAMPLES {
+                let t = time * (k as f32 / TOI_EARLIER_SAMPLES as f32);
+                check(
+                    pair.gap_at(t)? > 0.0,
+                    "toi: shapes overlap before the hit (tunnelling)",
+                )?;
+            }
+        }
+        Toi::Separated => {
+            if !spin_in_range {
+                return Ok(());
+            }
+            for k in 0..=TOI_SEPARATED_SAMPLES {
+                let t = t_max * (k as f32 / TOI_SEPARATED_SAMPLES as f32);
+                check(
+                    pair.gap_at(t)? > 0.0,
+                    "toi: separated but the shapes overlap at a sampled time",
+                )?;
+            }
+        }
+        Toi::Overlapping => {
+            check(
+                pair.gap_at(0.0)? <= 0.0,
+                "toi: overlapping but GJK finds a gap at time 0",
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// `shape`'s box at [`TOI_BOUNDS_SAMPLES`] evenly spaced times in `[0, dt]` (both ends
+/// included) lies in `movement_bounds(shape, motion, dt)`.
+fn bounds_hold(shape: &Shape, motion: &Motion, dt: f32) -> Result<(), Violation> {
+    let bounds = movement_bounds(shape, motion, dt);
+    check(bounds.is_valid(), "movement bounds: not a valid box")?;
+    for k in 0..TOI_BOUNDS_SAMPLES {
+        let t = dt * (k as f32 / (TOI_BOUNDS_SAMPLES - 1) as f32);
+        check(
+            bounds.contains(&shape.aabb(&motion.pose_at(t))),
+            "movement bounds: the shape's box at a sampled time sticks out",
+        )?;
+    }
+    Ok(())
+}
+
+/// The pair as `time_of_impact` sees it, sampled with cold-started GJK.
+struct Sampler<'q, 's> {
+    a: &'q Shape<'s>,
+    motion_a: &'q Motion,
+    b: &'q Shape<'s>,
+    motion_b: &'q Motion,
+}
+
+impl Sampler<'_, '_> {
+    /// GJK distance between the shapes at time `t` (m).
+    fn gap_at(&self, t: f32) -> Result<f32, Violation> {
+        let pose_a: Iso = self.motion_a.pose_at(t);
+        let pose_b: Iso = self.motion_b.pose_at(t);
+        let mut cache = SimplexCache::default();
+        distance(self.a, &pose_a, self.b, &pose_b, &mut cache)
+            .map(|out| out.distance)
+            .map_err(|_| Violation("toi: distance refused a pose from Motion::pose_at"))
+    }
+
+    /// The size of the numbers GJK works with (m): coordinates and finite shape sizes.
+    fn scale(&self, t_max: f32) -> f32 {
+        let reach = |s: &Shape| {
+            if matches!(s, Shape::HalfSpace(_)) {
+                0.0
+            } else {
+                s.bounding_radius()
+            }
+        };
+        let far = |m: &Motion| m.pose.position.abs().max_elem() + m.linear.abs().max_elem() * t_max;
+        reach(self.a) + reach(self.b) + far(self.motion_a) + far(self.motion_b)
+    }
+}
+
+/// True when every number is within [`WORKING_RANGE`] and the tolerance is at least
+/// `1e-4` m (below that, `f32` GJK error at metre scale is a sizeable part of it).
+fn in_working_range(
+    a: &Shape,
+    motion_a: &Motion,
+    b: &Shape,
+    motion_b: &Motion,
+    t_max: f32,
+    tolerance: f32,
+) -> bool {
+    let small = |v: Vec3| v.abs().max_elem() <= WORKING_RANGE;
+    let sized =
+        |s: &Shape| matches!(s, Shape::HalfSpace(_)) || s.bounding_radius() <= WORKING_RANGE;
+    let moving = |m: &Motion| small(m.pose.position) && small(m.linear) && small(m.angular);
+    moving(motion_a)
+        && moving(motion_b)
+        && sized(a)
+        && sized(b)
+        && t_max <= 10.0
+        && (1.0e-4..=1.0).contains(&tolerance)
+}
