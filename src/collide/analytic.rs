@@ -1,6 +1,8 @@
 //! Closed forms: sphere, capsule and half-space pairs. They also serve as test oracles.
 
-use crate::math::{scalar, Vec3};
+use super::manifold::{Candidate, ContactId, LocalManifold, MAX_MANIFOLD_POINTS};
+use crate::math::{scalar, Iso, Vec3};
+use crate::shape::{Capsule, FeatureId, HalfSpace, Shape, Sphere, MAX_HULL_VERTICES};
 
 /// Closest points between segments `p1–q1` and `p2–q2`: returns `(s, t)` with the points
 /// `p1 + s (q1 − p1)` and `p2 + t (q2 − p2)`, `s, t ∈ [0, 1]`. Degenerate segments
@@ -39,4 +41,333 @@ pub fn segment_closest_points(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> (f32, f
         s = scalar::clamp((b - c) / a, 0.0, 1.0);
     }
     (s, t)
+}
+
+/// Below this `sin` of the angle between two capsule segments (about 2.9°), the segments
+/// count as parallel and their overlap gives two points (stacked logs rest on a line, not
+/// a point).
+const PARALLEL_SIN: f32 = 0.05;
+
+/// Relative tolerance (fraction of the segment length) under which a point on a capsule's
+/// segment is named by the nearer end vertex instead of the segment.
+const END_TOLERANCE: f32 = 1.0e-4;
+
+/// Below this fraction of the coordinates' size, a gap between core points is rounding
+/// noise (`f32` keeps about 6e-8 relative; each point takes a few operations): the cores
+/// touch and the normal comes from the fallback rules.
+const TOUCH_TOLERANCE: f32 = 1.0e-6;
+
+/// The feature of capsule `c`'s core nearest to the core point `p` (local frame): vertex 0
+/// (bottom end), vertex 1 (top end) or the segment, edge (0, 1).
+pub(crate) fn segment_feature(c: &Capsule, p: Vec3) -> FeatureId {
+    let h = c.half_height;
+    if p.y <= -h + END_TOLERANCE * 2.0 * h {
+        FeatureId::vertex(0)
+    } else if p.y >= h - END_TOLERANCE * 2.0 * h {
+        FeatureId::vertex(1)
+    } else {
+        FeatureId::edge(0, 1)
+    }
+}
+
+/// The feature of a segment at parameter `t ∈ [0, 1]`.
+fn feature_at(t: f32) -> FeatureId {
+    if t <= END_TOLERANCE {
+        FeatureId::vertex(0)
+    } else if t >= 1.0 - END_TOLERANCE {
+        FeatureId::vertex(1)
+    } else {
+        FeatureId::edge(0, 1)
+    }
+}
+
+/// The unit vector along `v`, or the part of `fallback` perpendicular to `axis` when `v`
+/// is (nearly) zero, or any perpendicular of `axis` when that is zero too.
+fn direction_or_perpendicular(v: Vec3, axis: Vec3, fallback: Vec3) -> Vec3 {
+    if let Some((n, _)) = v.normalize_and_length() {
+        return n;
+    }
+    let aa = axis.length_squared();
+    if aa > 0.0 {
+        let perp = fallback - axis * (fallback.dot(axis) / aa);
+        perp.normalize_or(axis.normalize_or(Vec3::Y).any_perpendicular())
+    } else {
+        fallback
+    }
+}
+
+/// Sphere `a` at A's origin, sphere `b` centred at `b_in_a.position`. Normal along the
+/// centre line; `fallback` (unit) when the centres coincide.
+pub(crate) fn sphere_sphere(
+    a: &Sphere,
+    b: &Sphere,
+    b_in_a: &Iso,
+    fallback: Vec3,
+    margin: f32,
+) -> Option<LocalManifold> {
+    let c = b_in_a.position;
+    let normal = c.normalize_or(fallback);
+    let id = ContactId {
+        a: FeatureId::vertex(0),
+        b: FeatureId::vertex(0),
+    };
+    let mut m = LocalManifold::new(normal);
+    m.push_within(
+        Candidate::new(normal * a.radius, c - normal * b.radius, normal, id),
+        margin,
+    );
+    m.non_empty()
+}
+
+/// Sphere `a` at A's origin, capsule `b` at `b_in_a`: the sphere against the closest point
+/// of B's segment. When the centre lies on the segment the normal is `fallback` made
+/// perpendicular to the segment.
+pub(crate) fn sphere_capsule(
+    a: &Sphere,
+    b: &Capsule,
+    b_in_a: &Iso,
+    fallback: Vec3,
+    margin: f32,
+) -> Option<LocalManifold> {
+    let (b0, b1) = b.segment();
+    let p = b_in_a.transform_point(b0);
+    let d = b_in_a.transform_point(b1) - p;
+    let dd = d.length_squared();
+    // Closest point on p + t d to the origin: t = −p·d / d·d, clamped.
+    let t = if dd > 0.0 {
+        scalar::clamp(-p.dot(d) / dd, 0.0, 1.0)
+    } else {
+        0.0
+    };
+    let q = p + d * t;
+    // Below rounding noise of the coordinates, q has no direction: the centre is on the
+    // segment.
+    let touching = q.length() <= TOUCH_TOLERANCE * (p.length() + d.length());
+    let normal = if touching {
+        direction_or_perpendicular(Vec3::ZERO, d, fallback)
+    } else {
+        direction_or_perpendicular(q, d, fallback)
+    };
+    let id = ContactId {
+        a: FeatureId::vertex(0),
+        b: feature_at(t),
+    };
+    let mut m = LocalManifold::new(normal);
+    m.push_within(
+        Candidate::new(normal * a.radius, q - normal * b.radius, normal, id),
+        margin,
+    );
+    m.non_empty()
+}
+
+/// Capsule `a` (A's frame) against capsule `b` at `b_in_a`: the segments' closest points
+/// (Ericson 5.1.9); when the segments are parallel within [`PARALLEL_SIN`] and overlap
+/// along A's axis, two points at the ends of the overlap. When the segments cross, the
+/// normal is `d₁ × d₂` turned towards B's centre; when they are collinear, `fallback` made
+/// perpendicular to A's segment.
+pub(crate) fn capsule_capsule(
+    a: &Capsule,
+    b: &Capsule,
+    b_in_a: &Iso,
+    fallback: Vec3,
+    margin: f32,
+) -> Option<LocalManifold> {
+    let (p1, q1) = a.segment();
+    let (b0, b1) = b.segment();
+    let p2 = b_in_a.transform_point(b0);
+    let q2 = b_in_a.transform_point(b1);
+    let d1 = q1 - p1;
+    let d2 = q2 - p2;
+    let (s, t) = segment_closest_points(p1, q1, p2, q2);
+    let c1 = p1 + d1 * s;
+    let c2 = p2 + d2 * t;
+    // Closer than rounding noise of the coordinates, the segments meet and c₂ − c₁ has no
+    // direction.
+    let scale = p1.length() + q1.length() + p2.length() + q2.length();
+    let normal = match (c2 - c1).normalize_and_length() {
+        Some((n, gap)) if gap > TOUCH_TOLERANCE * scale => n,
+        _ => crossing_normal(d1, d2, b_in_a.position, fallback),
+    };
+    let (ra, rb) = (a.radius, b.radius);
+    let mut m = LocalManifold::new(normal);
+    parallel_overlap(&mut m, [p1, d1], [p2, d2], [ra, rb], margin);
+    if m.len == 0 {
+        let id = ContactId {
+            a: feature_at(s),
+            b: feature_at(t),
+        };
+        m.push_within(
+            Candidate::new(c1 + normal * ra, c2 - normal * rb, normal, id),
+            margin,
+        );
+    }
+    m.non_empty()
+}
+
+/// Normal of two segments that meet: `d₁ × d₂` pointing towards B's centre (or along
+/// `fallback` when B's centre is in the plane of the two); for collinear segments,
+/// `fallback` made perpendicular to `d₁`.
+fn crossing_normal(d1: Vec3, d2: Vec3, center_b: Vec3, fallback: Vec3) -> Vec3 {
+    let n = direction_or_perpendicular(d1.cross(d2), d1, fallback);
+    let side = n.dot(center_b);
+    let flip = if side != 0.0 {
+        side < 0.0
+    } else {
+        n.dot(fallback) < 0.0
+    };
+    if flip {
+        -n
+    } else {
+        n
+    }
+}
+
+/// Two points for nearly parallel, overlapping segments `p₁ + u d₁` and `p₂ + t d₂`: B's
+/// segment is clipped to A's parameter range `u ∈ [0, 1]`, and each end of the overlap
+/// pairs a point of B's segment with its projection on A's. Ids: an end of B inside A's
+/// range is (A's segment, B's vertex); an end cut by A's end vertex is (A's vertex, B's
+/// segment). Adds nothing when the segments are not parallel or do not overlap.
+fn parallel_overlap(
+    m: &mut LocalManifold,
+    [p1, d1]: [Vec3; 2],
+    [p2, d2]: [Vec3; 2],
+    [ra, rb]: [f32; 2],
+    margin: f32,
+) {
+    let dd1 = d1.length_squared();
+    let dd2 = d2.length_squared();
+    let parallel = d1.cross(d2).length_squared() <= PARALLEL_SIN * PARALLEL_SIN * dd1 * dd2;
+    if !(parallel && dd1 > 0.0 && dd2 > 0.0) {
+        return;
+    }
+    // B's end points as parameters along A's segment.
+    let u0 = (p2 - p1).dot(d1) / dd1;
+    let u1 = (p2 + d2 - p1).dot(d1) / dd1;
+    let du = u1 - u0;
+    let spans = scalar::abs(du) > END_TOLERANCE; // false for NaN too
+    if !spans {
+        return;
+    }
+    // (parameter, B's vertex there) at the low and high ends.
+    let (low, high) = if u0 <= u1 {
+        ((u0, 0), (u1, 1))
+    } else {
+        ((u1, 1), (u0, 0))
+    };
+    let lo = scalar::max(low.0, 0.0);
+    let hi = scalar::min(high.0, 1.0);
+    let overlaps = hi - lo > END_TOLERANCE;
+    if !overlaps {
+        return;
+    }
+    let normal = m.normal;
+    let ends = [
+        (lo, low.0 < 0.0, 0u32, low.1),
+        (hi, high.0 > 1.0, 1u32, high.1),
+    ];
+    for (u, cut_by_a, a_vertex, b_vertex) in ends {
+        let t = scalar::clamp((u - u0) / du, 0.0, 1.0);
+        let on_a = p1 + d1 * u;
+        let on_b = p2 + d2 * t;
+        let id = if cut_by_a {
+            ContactId {
+                a: FeatureId::vertex(a_vertex),
+                b: FeatureId::edge(0, 1),
+            }
+        } else {
+            ContactId {
+                a: FeatureId::edge(0, 1),
+                b: FeatureId::vertex(b_vertex),
+            }
+        };
+        m.push_within(
+            Candidate::new(on_a + normal * ra, on_b - normal * rb, normal, id),
+            margin,
+        );
+    }
+}
+
+/// Half-space `plane` (A, `{p : n · p <= 0}` in A's frame) against any shape `b` at
+/// `b_in_a`: each core vertex of B, pushed down by B's radius, whose height above the
+/// plane is within `margin`; the point on A is its projection on the plane. A cuboid keeps
+/// its deepest 4 vertices (ties by index), a hull its 4 chosen by
+/// [`super::clip::reduce_to_four`]. Two half-spaces never touch.
+pub(crate) fn half_space_contact(
+    plane: &HalfSpace,
+    b: &Shape,
+    b_in_a: &Iso,
+    margin: f32,
+) -> Option<LocalManifold> {
+    let n = plane.normal;
+    let radius = b.radius();
+    let mut candidates = [Candidate::default(); MAX_HULL_VERTICES];
+    let mut count = 0usize;
+    let mut add = |local: Vec3, index: u32| {
+        let point_b = b_in_a.transform_point(local) - n * radius;
+        let point_a = point_b - n * n.dot(point_b);
+        let id = ContactId {
+            a: FeatureId::face(0),
+            b: FeatureId::vertex(index),
+        };
+        let c = Candidate::new(point_a, point_b, n, id);
+        if c.separation <= margin {
+            if let Some(slot) = candidates.get_mut(count) {
+                *slot = c;
+                count += 1;
+            }
+        }
+    };
+    match b {
+        Shape::HalfSpace(_) => return None,
+        Shape::Sphere(_) => add(Vec3::ZERO, 0),
+        Shape::Capsule(c) => {
+            let (s0, s1) = c.segment();
+            add(s0, 0);
+            add(s1, 1);
+        }
+        Shape::Cuboid(c) => {
+            for i in 0..8 {
+                add(c.core_vertex(i), i);
+            }
+        }
+        Shape::Hull(h) => {
+            for (i, v) in h.vertices().iter().enumerate() {
+                add(*v, i as u32);
+            }
+        }
+        Shape::Triangle(t) => {
+            for (i, v) in t.vertices.iter().enumerate() {
+                add(*v, i as u32);
+            }
+        }
+    }
+    let found = candidates.get(..count).unwrap_or(&[]);
+    if matches!(b, Shape::Cuboid(_)) {
+        deepest_four(n, found)
+    } else {
+        LocalManifold::from_candidates(n, found)
+    }
+}
+
+/// The (at most) 4 deepest candidates, deepest first; ties go to the lower index.
+fn deepest_four(normal: Vec3, candidates: &[Candidate]) -> Option<LocalManifold> {
+    let mut m = LocalManifold::new(normal);
+    let mut taken = [false; 8];
+    for _ in 0..MAX_MANIFOLD_POINTS {
+        let mut best: Option<usize> = None;
+        let mut best_s = f32::INFINITY;
+        for (i, c) in candidates.iter().enumerate().take(taken.len()) {
+            let free = !taken.get(i).copied().unwrap_or(true);
+            if free && (best.is_none() || c.separation < best_s) {
+                best = Some(i);
+                best_s = c.separation;
+            }
+        }
+        let Some(i) = best else { break };
+        if let (Some(t), Some(c)) = (taken.get_mut(i), candidates.get(i)) {
+            *t = true;
+            m.push_within(*c, f32::INFINITY);
+        }
+    }
+    m.non_empty()
 }

@@ -1,2 +1,528 @@
 //! Polygon clipping for face contacts (Sutherland–Hodgman against the side planes of a
 //! reference face) and reduction of the clipped points to at most 4.
+//!
+//! Everything here works in one frame (the caller's, A's frame in the narrow phase) and on
+//! [`Face`]s already moved into it.
+//!
+//! Feature ids follow each clipped point (Box2D `b2ClipPolygons`, Gregorius, "Robust
+//! Contact Creation for Physics Simulations", GDC 2015): an incident vertex that survives
+//! every side plane is (reference face, incident vertex); a point made where the incident
+//! edge `e` crosses reference side plane `k` is (reference edge `k`, incident edge `e`); a
+//! reference corner that lies inside the incident polygon is (reference vertex, incident
+//! face). These pairs stay the same for as long as the same features touch.
+
+use super::manifold::Candidate;
+use crate::math::{scalar, Vec3};
+use crate::shape::{Face, FeatureId, MAX_FACE_VERTICES};
+
+/// Most points a clipped polygon can have: each of the at most `MAX_FACE_VERTICES` side
+/// planes adds at most one vertex to an incident polygon of at most `MAX_FACE_VERTICES`.
+pub(crate) const MAX_CLIP_POINTS: usize = 2 * MAX_FACE_VERTICES;
+
+/// Relative tolerance of [`closest_feature`]: a fraction of the face's longest edge.
+const FEATURE_TOLERANCE: f32 = 1.0e-4;
+
+/// "No reference edge": the segment leaving a clip vertex lies inside the reference face.
+const NO_EDGE: u8 = u8::MAX;
+
+/// One vertex of a polygon being clipped, with the features it lies on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct ClipVertex {
+    /// The point (caller's frame, m), on the incident polygon.
+    pub point: Vec3,
+    /// The reference feature it lies on (face, side edge or corner).
+    pub ref_id: FeatureId,
+    /// The incident feature it lies on (vertex, edge or face).
+    pub inc_id: FeatureId,
+    /// Reference side plane the segment to the next vertex lies on, or [`NO_EDGE`].
+    seg_ref_edge: u8,
+    /// Incident feature the segment to the next vertex lies on.
+    seg_inc: FeatureId,
+}
+
+const EMPTY_VERTEX: ClipVertex = ClipVertex {
+    point: Vec3::ZERO,
+    ref_id: FeatureId(0),
+    inc_id: FeatureId(0),
+    seg_ref_edge: NO_EDGE,
+    seg_inc: FeatureId(0),
+};
+
+/// A clipped polygon (or polyline): at most [`MAX_CLIP_POINTS`] vertices in order.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ClipPolygon {
+    len: usize,
+    vertices: [ClipVertex; MAX_CLIP_POINTS],
+}
+
+impl ClipPolygon {
+    const fn new() -> ClipPolygon {
+        ClipPolygon {
+            len: 0,
+            vertices: [EMPTY_VERTEX; MAX_CLIP_POINTS],
+        }
+    }
+
+    /// Append a vertex; ignored when full (cannot happen for faces within
+    /// `MAX_FACE_VERTICES`, see [`MAX_CLIP_POINTS`]).
+    fn push(&mut self, v: ClipVertex) {
+        if let Some(slot) = self.vertices.get_mut(self.len) {
+            *slot = v;
+            self.len += 1;
+        }
+    }
+
+    /// The vertices in use.
+    pub fn vertices(&self) -> &[ClipVertex] {
+        self.vertices.get(..self.len).unwrap_or(&[])
+    }
+}
+
+/// Outward normal of the side plane through reference edge `k` (from vertex `k` to
+/// `k + 1`): `(v₁ − v₀) × n`, outward for a polygon counter-clockwise about `n`. Not
+/// normalised: only its sign is used, and `d = s · (p − v₀)` scales with it.
+#[inline]
+fn side_plane(reference: &Face, k: usize) -> (Vec3, Vec3) {
+    let verts = reference.points();
+    let n = verts.len();
+    let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
+    let v1 = verts.get((k + 1) % n.max(1)).copied().unwrap_or(v0);
+    ((v1 - v0).cross(reference.normal), v0)
+}
+
+/// The reference feature of a point made on side plane `k` from a segment that lay on
+/// `seg_ref_edge`: edge `k` when the segment was inside the face, else the corner shared
+/// by the two side edges (edge `j` ends where edge `j + 1` starts).
+fn reference_feature(reference: &Face, seg_ref_edge: u8, k: usize) -> FeatureId {
+    let n = reference.len as usize;
+    let edge_k = reference.edge_ids.get(k).copied().unwrap_or(reference.id);
+    if seg_ref_edge == NO_EDGE || n == 0 {
+        return edge_k;
+    }
+    let j = seg_ref_edge as usize;
+    let corner = if (j + 1) % n == k {
+        reference.vertex_ids.get(k)
+    } else if (k + 1) % n == j {
+        reference.vertex_ids.get(j)
+    } else {
+        None
+    };
+    corner.copied().unwrap_or(edge_k)
+}
+
+/// The point where segment `p → q` crosses the plane, from the signed plane distances
+/// `dp` and `dq` of opposite strict signs: `p + (q − p) dp / (dp − dq)`. The division is
+/// safe: `dp − dq` is non-zero when the signs differ strictly.
+#[inline]
+fn crossing(p: Vec3, q: Vec3, dp: f32, dq: f32) -> Vec3 {
+    let t = scalar::clamp(dp / (dp - dq), 0.0, 1.0);
+    p + (q - p) * t
+}
+
+/// Clip `input` against reference side plane `k`, keeping the part with `d <= 0`
+/// (Sutherland–Hodgman, 1974). A point is made only where a segment crosses the plane
+/// strictly, so a vertex lying on the plane is not doubled. `closed` says whether the last
+/// vertex joins the first (a polygon) or not (a segment).
+fn clip_by_side_plane(
+    input: &ClipPolygon,
+    reference: &Face,
+    k: usize,
+    incident_face: FeatureId,
+    closed: bool,
+) -> ClipPolygon {
+    let (s, v0) = side_plane(reference, k);
+    let mut out = ClipPolygon::new();
+    let verts = input.vertices();
+    let n = verts.len();
+    for (i, p) in verts.iter().enumerate() {
+        let dp = s.dot(p.point - v0);
+        if dp <= 0.0 {
+            out.push(*p);
+        }
+        let next = if i + 1 < n {
+            verts.get(i + 1)
+        } else if closed && n > 2 {
+            verts.first()
+        } else {
+            None
+        };
+        let Some(q) = next else { continue };
+        let dq = s.dot(q.point - v0);
+        let exits = dp < 0.0 && dq > 0.0;
+        let enters = dp > 0.0 && dq < 0.0;
+        if exits || enters {
+            let ref_id = reference_feature(reference, p.seg_ref_edge, k);
+            let (seg_ref_edge, seg_inc) = if exits {
+                // From here the clipped boundary runs along side plane k, inside the
+                // incident polygon, until it re-enters.
+                (k as u8, incident_face)
+            } else {
+                (p.seg_ref_edge, p.seg_inc)
+            };
+            out.push(ClipVertex {
+                point: crossing(p.point, q.point, dp, dq),
+                ref_id,
+                inc_id: p.seg_inc,
+                seg_ref_edge,
+                seg_inc,
+            });
+        }
+    }
+    out
+}
+
+/// Clip the incident polygon against the side planes of the reference face (both in the
+/// same frame). The result lies on the incident polygon, inside the reference face's prism;
+/// points are not yet filtered by depth. A 1-vertex incident face gives that vertex when it
+/// is inside; a 2-vertex one is clipped as a segment.
+pub(crate) fn clip_polygon(reference: &Face, incident: &Face) -> ClipPolygon {
+    let mut poly = ClipPolygon::new();
+    let m = (incident.len as usize).min(MAX_FACE_VERTICES);
+    for k in 0..m {
+        poly.push(ClipVertex {
+            point: incident.vertices.get(k).copied().unwrap_or(Vec3::ZERO),
+            ref_id: reference.id,
+            inc_id: incident.vertex_ids.get(k).copied().unwrap_or(incident.id),
+            seg_ref_edge: NO_EDGE,
+            seg_inc: incident.edge_ids.get(k).copied().unwrap_or(incident.id),
+        });
+    }
+    clip_against_face(poly, reference, incident.id, m > 2)
+}
+
+/// Clip the segment `p0 → p1` (ids `vertex_ids`, edge id `edge_id`) against the side
+/// planes of the reference face: at most 2 points.
+pub(crate) fn clip_segment(
+    reference: &Face,
+    p0: Vec3,
+    p1: Vec3,
+    vertex_ids: [FeatureId; 2],
+    edge_id: FeatureId,
+) -> ClipPolygon {
+    let mut poly = ClipPolygon::new();
+    for (p, id) in [(p0, vertex_ids[0]), (p1, vertex_ids[1])] {
+        poly.push(ClipVertex {
+            point: p,
+            ref_id: reference.id,
+            inc_id: id,
+            seg_ref_edge: NO_EDGE,
+            seg_inc: edge_id,
+        });
+    }
+    clip_against_face(poly, reference, edge_id, false)
+}
+
+/// Run every side plane of `reference` over `poly` in edge order.
+fn clip_against_face(
+    mut poly: ClipPolygon,
+    reference: &Face,
+    incident_face: FeatureId,
+    closed: bool,
+) -> ClipPolygon {
+    let planes = (reference.len as usize).min(MAX_FACE_VERTICES);
+    if planes < 3 {
+        return poly;
+    }
+    for k in 0..planes {
+        poly = clip_by_side_plane(&poly, reference, k, incident_face, closed);
+        if poly.len == 0 {
+            break;
+        }
+    }
+    poly
+}
+
+/// The feature of `face` (a polygon, segment or point in the caller's frame) nearest to
+/// `p`: the face itself when `p` projects inside it by more than a tolerance, else the
+/// nearest boundary edge, or a vertex when the nearest boundary point is within the
+/// tolerance of one. The tolerance is [`FEATURE_TOLERANCE`] times the longest edge, so a
+/// point resting exactly on an edge or corner is named by it despite rounding.
+pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
+    let verts = face.points();
+    let n = verts.len();
+    let mut longest = 0.0;
+    for k in 0..n {
+        let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
+        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        longest = scalar::max(longest, (v1 - v0).length());
+    }
+    let tolerance = FEATURE_TOLERANCE * longest;
+    if n == 0 {
+        return face.id;
+    }
+    if n == 1 {
+        return face.vertex_ids[0];
+    }
+    if n >= 3 {
+        let mut inside = true;
+        for k in 0..n {
+            let (s, v0) = side_plane(face, k);
+            let len = s.length();
+            // Signed distance (m) of p outside side plane k.
+            if s.dot(p - v0) > -tolerance * len {
+                inside = false;
+                break;
+            }
+        }
+        if inside {
+            return face.id;
+        }
+    }
+    // Nearest point on the boundary; a segment (n == 2) has one edge.
+    let edges = if n == 2 { 1 } else { n };
+    let mut best = face.id;
+    let mut best_d2 = f32::INFINITY;
+    for k in 0..edges {
+        let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
+        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        let e = v1 - v0;
+        let e2 = e.length_squared();
+        let t = if e2 > 0.0 {
+            scalar::clamp((p - v0).dot(e) / e2, 0.0, 1.0)
+        } else {
+            0.0
+        };
+        let d2 = (v0 + e * t - p).length_squared();
+        if d2 < best_d2 {
+            best_d2 = d2;
+            let along = t * scalar::sqrt(e2);
+            let back = (1.0 - t) * scalar::sqrt(e2);
+            best = if along <= tolerance {
+                face.vertex_ids.get(k).copied().unwrap_or(face.id)
+            } else if back <= tolerance {
+                face.vertex_ids.get((k + 1) % n).copied().unwrap_or(face.id)
+            } else {
+                face.edge_ids.get(k).copied().unwrap_or(face.id)
+            };
+        }
+    }
+    best
+}
+
+/// The indices (into `points`) of at most 4 points that keep the manifold's support
+/// polygon large (Gregorius, GDC 2015): the deepest point; the one farthest from it; the
+/// one making the largest triangle with those two; the one adding the most area outside
+/// that triangle. Areas are signed about `normal`. Ties go to the lowest
+/// index. A point that adds no area (`<= 1e-6` of the squared spread) is not taken, so
+/// collinear sets give 2 points and coincident sets 1.
+pub(crate) fn reduce_to_four(points: &[Candidate], normal: Vec3) -> ([usize; 4], usize) {
+    let mut chosen = [0usize; 4];
+    let Some(first) = points.first() else {
+        return (chosen, 0);
+    };
+    // 1. Deepest.
+    let mut i0 = 0;
+    let mut s0 = first.separation;
+    for (i, c) in points.iter().enumerate() {
+        if c.separation < s0 {
+            s0 = c.separation;
+            i0 = i;
+        }
+    }
+    let p0 = points.get(i0).map_or(Vec3::ZERO, |c| c.point_a);
+    chosen[0] = i0;
+    // 2. Farthest from the deepest.
+    let mut i1 = i0;
+    let mut d1 = 0.0;
+    for (i, c) in points.iter().enumerate() {
+        let d = (c.point_a - p0).length_squared();
+        if d > d1 {
+            d1 = d;
+            i1 = i;
+        }
+    }
+    if i1 == i0 {
+        return (chosen, 1);
+    }
+    chosen[1] = i1;
+    let p1 = points.get(i1).map_or(p0, |c| c.point_a);
+    let e01 = p1 - p0;
+    // Twice the signed area of (p0, p1, q) about the normal.
+    let area = |q: Vec3| e01.cross(q - p0).dot(normal);
+    let min_area = 1.0e-6 * d1;
+    // 3. Largest triangle.
+    let mut i2 = i0;
+    let mut a2 = min_area;
+    let mut side = 1.0;
+    for (i, c) in points.iter().enumerate() {
+        let a = area(c.point_a);
+        if scalar::abs(a) > a2 {
+            a2 = scalar::abs(a);
+            i2 = i;
+            side = scalar::sign(a);
+        }
+    }
+    if i2 == i0 {
+        return (chosen, 2);
+    }
+    chosen[2] = i2;
+    // 4. Most area added to the triangle: the largest area of the triangle q makes with
+    //    an edge of (p0, p1, p2) that q lies outside of. Gregorius takes the other side of
+    //    p0–p1 only; when p0–p1 is itself a boundary edge there is nothing there, and
+    //    the two other edges still give a fourth point.
+    let p2 = points.get(i2).map_or(p0, |c| c.point_a);
+    let oriented = normal * side;
+    let edge_area = |u: Vec3, v: Vec3, q: Vec3| (v - u).cross(q - u).dot(oriented);
+    let mut i3 = i0;
+    let mut a3 = min_area;
+    for (i, c) in points.iter().enumerate() {
+        let q = c.point_a;
+        let outside = scalar::max(
+            -edge_area(p0, p1, q),
+            scalar::max(-edge_area(p1, p2, q), -edge_area(p2, p0, q)),
+        );
+        if outside > a3 {
+            a3 = outside;
+            i3 = i;
+        }
+    }
+    if i3 == i0 {
+        return (chosen, 3);
+    }
+    chosen[3] = i3;
+    (chosen, 4)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collide::manifold::ContactId;
+    use crate::shape::Cuboid;
+    use std::vec::Vec;
+
+    /// The +Y face of a box of half-extents `h`, moved by `offset`, turned over when `flip`.
+    fn top_face(h: Vec3, offset: Vec3, flip: bool) -> Face {
+        let c = Cuboid::new(h).unwrap();
+        let f = c.face(1, !flip);
+        let mut f = f.transformed(&crate::math::Iso::from_position(offset));
+        if flip {
+            // The −Y face of a box above: same plane orientation as an incident face.
+            f.normal = -Vec3::Y;
+        }
+        f
+    }
+
+    #[test]
+    fn square_clipped_by_square_keeps_inside_corners_and_makes_crossings() {
+        // Reference: top of a 2×2 square at y = 0. Incident: bottom of a 2×2 square
+        // shifted by (1, 0, 1): one incident corner inside, one reference corner inside,
+        // two edge crossings on each side.
+        let reference = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 0.0), false);
+        let incident = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, 1.0, 1.0), true);
+        let out = clip_polygon(&reference, &incident);
+        let pts: Vec<Vec3> = out.vertices().iter().map(|v| v.point).collect();
+        assert_eq!(pts.len(), 4, "{pts:?}");
+        // The overlap of [-1,1]² and [0,2]² is [0,1]²: corners (0,0), (1,0), (1,1), (0,1).
+        for want in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            assert!(
+                pts.iter()
+                    .any(|p| (p.x - want.0).abs() < 1e-6 && (p.z - want.1).abs() < 1e-6),
+                "{want:?} in {pts:?}"
+            );
+        }
+        // Exactly one survivor of each kind: incident vertex (ref face), reference corner
+        // (incident face), and two crossings (ref edge, incident edge).
+        let kinds: Vec<(u32, u32)> = out
+            .vertices()
+            .iter()
+            .map(|v| (v.ref_id.0 >> 30, v.inc_id.0 >> 30))
+            .collect();
+        assert_eq!(
+            kinds.iter().filter(|k| **k == (2, 0)).count(),
+            1,
+            "{kinds:?}"
+        );
+        assert_eq!(
+            kinds.iter().filter(|k| **k == (0, 2)).count(),
+            1,
+            "{kinds:?}"
+        );
+        assert_eq!(
+            kinds.iter().filter(|k| **k == (1, 1)).count(),
+            2,
+            "{kinds:?}"
+        );
+    }
+
+    #[test]
+    fn vertex_on_a_side_plane_is_not_doubled() {
+        let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
+        // Same size, exactly on top: every incident vertex lies on two side planes.
+        let incident = top_face(Vec3::ONE, Vec3::new(0.0, 1.0, 0.0), true);
+        let out = clip_polygon(&reference, &incident);
+        assert_eq!(out.vertices().len(), 4);
+    }
+
+    #[test]
+    fn segment_clip_cuts_at_the_face_edge() {
+        let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
+        let out = clip_segment(
+            &reference,
+            Vec3::new(0.0, 0.1, 0.0),
+            Vec3::new(3.0, 0.1, 0.0),
+            [FeatureId::vertex(0), FeatureId::vertex(1)],
+            FeatureId::edge(0, 1),
+        );
+        let v = out.vertices();
+        assert_eq!(v.len(), 2);
+        assert_eq!(v[0].inc_id, FeatureId::vertex(0));
+        assert!((v[1].point.x - 1.0).abs() < 1e-6);
+        assert_eq!(v[1].inc_id, FeatureId::edge(0, 1));
+        assert_eq!(v[1].ref_id.0 >> 30, 1, "a reference edge");
+    }
+
+    fn candidate(x: f32, z: f32, separation: f32) -> Candidate {
+        let p = Vec3::new(x, 0.0, z);
+        Candidate {
+            point_a: p,
+            point_b: p,
+            separation,
+            id: ContactId::default(),
+        }
+    }
+
+    #[test]
+    fn reduction_keeps_the_deepest_and_the_outer_corners() {
+        // A 5×5 grid with the deepest point in the middle of one side.
+        let mut pts = Vec::new();
+        for i in 0..5 {
+            for j in 0..5 {
+                let deep = i == 0 && j == 2;
+                pts.push(candidate(
+                    i as f32,
+                    j as f32,
+                    if deep { -0.5 } else { -0.1 },
+                ));
+            }
+        }
+        let (chosen, n) = reduce_to_four(&pts, Vec3::Y);
+        assert_eq!(n, 4);
+        assert_eq!(chosen[0], 2, "deepest first");
+        let mut corners: Vec<(f32, f32)> = chosen[1..]
+            .iter()
+            .map(|&i| (pts[i].point_a.x, pts[i].point_a.z))
+            .collect();
+        corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        // Farthest from (0, 2): (4, 0) and (4, 4) tie, the lower index (4, 0) wins; the
+        // largest triangle adds (4, 4) (twice-area 16); outside that triangle (0, 0) and
+        // (0, 4) both add twice-area 8, the lower index (0, 0) wins.
+        assert_eq!(corners, [(0.0, 0.0), (4.0, 0.0), (4.0, 4.0)]);
+    }
+
+    #[test]
+    fn reduction_of_collinear_points_gives_two() {
+        let pts: Vec<Candidate> = (0..6).map(|i| candidate(i as f32, 0.0, -0.1)).collect();
+        let (chosen, n) = reduce_to_four(&pts, Vec3::Y);
+        assert_eq!(n, 2);
+        assert_eq!(&chosen[..2], &[0, 5]);
+    }
+
+    #[test]
+    fn closest_feature_names_face_edge_and_vertex() {
+        let f = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
+        assert_eq!(closest_feature(&f, Vec3::new(0.2, 0.0, 0.3)), f.id);
+        assert_eq!(closest_feature(&f, Vec3::new(1.0, 0.0, 0.3)).0 >> 30, 1);
+        assert_eq!(closest_feature(&f, Vec3::new(1.0, 0.0, 1.0)).0 >> 30, 0);
+        assert_eq!(closest_feature(&f, Vec3::new(1.5, 0.0, 2.0)).0 >> 30, 0);
+    }
+}
