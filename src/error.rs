@@ -152,15 +152,6 @@ impl core::fmt::Display for Error {
 
 impl core::error::Error for Error {}
 
-/// Check that a scalar is finite.
-pub(crate) fn finite(x: f32, what: Input) -> Result<f32, Error> {
-    if x.is_finite() {
-        Ok(x)
-    } else {
-        Err(Error::NonFinite(what))
-    }
-}
-
 /// Check that a scalar is finite and strictly positive.
 pub(crate) fn positive(x: f32, what: Input) -> Result<f32, Error> {
     if !x.is_finite() {
