@@ -9,7 +9,7 @@ use crate::shape::Shape;
 /// Largest coordinate and shape size (m) for which the geometric properties are checked.
 /// Outside it `f32` rounding in GJK/EPA grows past the slack below; only "no panic, at
 /// most 4 finite points" is checked there.
-const WORKING_RANGE: f32 = 1.0e3;
+pub const WORKING_RANGE: f32 = 1.0e3;
 
 /// Smallest height of a triangle, as a fraction of its longest edge, for which the
 /// geometric properties are checked (see `well_shaped`).
@@ -28,9 +28,9 @@ const UNIT_SLACK: f32 = 1.0e-4;
 /// −EPA depth, as `AGREE_ABS · scale + AGREE_REL · |s|`: a clipped face manifold is kept
 /// only within 1 mm + 0.2 % of the GJK/EPA answer (the manifold's guard), the closed forms
 /// and GJK/EPA each stop within their own tolerance, and `scale >= 1`.
-const AGREE_ABS: f32 = 1.5e-3;
+pub const AGREE_ABS: f32 = 1.5e-3;
 /// See [`AGREE_ABS`].
-const AGREE_REL: f32 = 0.005;
+pub const AGREE_REL: f32 = 0.005;
 
 /// Properties of `contact(a, pose_a, b, pose_b, margin)`:
 ///
