@@ -9,7 +9,7 @@ use crate::shape::Shape;
 /// Largest coordinate and shape size (m) for which the geometric properties are checked.
 /// Outside it `f32` rounding in GJK/EPA grows past the slack below; only "no panic, at
 /// most 4 finite points" is checked there.
-pub const WORKING_RANGE: f32 = 1.0e3;
+pub const MANIFOLD_WORKING_RANGE: f32 = 1.0e3;
 
 /// Smallest height of a triangle, as a fraction of its longest edge, for which the
 /// geometric properties are checked (see `well_shaped`).
@@ -39,7 +39,7 @@ pub const AGREE_REL: f32 = 0.005;
 /// - a manifold has 1 to [`MAX_MANIFOLD_POINTS`] points, all finite, a unit normal, and
 ///   every separation `<= margin`;
 ///
-/// and in the working range (coordinates, sizes and margin within [`WORKING_RANGE`],
+/// and in the working range (coordinates, sizes and margin within [`MANIFOLD_WORKING_RANGE`],
 /// no needle triangles):
 ///
 /// - every separation equals `(point_b − point_a) · normal`;
@@ -151,7 +151,7 @@ fn scene_scale(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> f32 {
 }
 
 fn in_working_range(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso, margin: f32) -> bool {
-    let r = WORKING_RANGE;
+    let r = MANIFOLD_WORKING_RANGE;
     pose_a.position.abs().max_elem() <= r
         && pose_b.position.abs().max_elem() <= r
         && size(a) <= r
