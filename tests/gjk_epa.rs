@@ -1,0 +1,758 @@
+//! GJK distance and EPA penetration against closed forms and the brute-force oracle, with
+//! the property functions of `carom::props` over random poses.
+//!
+//! Tolerances: coordinates here are at most a few metres, where one f32 ulp is about
+//! 5e-7 m. A world ↔ local transform, GJK's barycentric reconstruction of the closest
+//! points and the oracle's own arithmetic each cost a few ulps, and GJK stops within a
+//! relative 1e-6 of the distance; together well under 1e-5 m. Distances are compared to
+//! 1e-4 m: ten times that, while any wrong feature or missed iteration is off by
+//! millimetres or more. Unit normals are compared to 1e-3 (a 1e-4 m error on a lever of
+//! 0.1 m).
+
+use carom::collide::{
+    distance, intersects, penetration, segment_closest_points, EpaStatus, GjkStatus, SimplexCache,
+    MAX_GJK_ITERATIONS,
+};
+use carom::math::{Iso, Quat, Vec3};
+use carom::props::{
+    brute_force_distance, core_vertices, distance_properties, penetration_properties,
+};
+use carom::rng::SplitMix64;
+use carom::shape::{ConvexHull, Shape};
+
+/// Distance tolerance (m), see the file comment.
+const TOL: f32 = 1.0e-4;
+/// Normal tolerance (length of the difference of two unit vectors).
+const NORMAL_TOL: f32 = 1.0e-3;
+
+fn random_pose(rng: &mut SplitMix64, reach: f32) -> Iso {
+    Iso::new(rng.unit_vector() * rng.range(0.0, reach), rng.rotation())
+}
+
+fn hull_cloud(rng: &mut SplitMix64, scale: f32) -> [Vec3; 16] {
+    let mut pts = [Vec3::ZERO; 16];
+    for p in pts.iter_mut() {
+        *p = rng.unit_vector() * scale;
+    }
+    pts
+}
+
+/// Random hulls of 16 unit-sphere points, or `None` when the hull builder refuses them.
+fn random_hulls(seed: u64, n: usize, scale: f32) -> Option<Vec<ConvexHull>> {
+    let mut rng = SplitMix64::new(seed);
+    (0..n)
+        .map(|_| ConvexHull::new(&hull_cloud(&mut rng, scale)).ok())
+        .collect()
+}
+
+fn fresh_distance(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> carom::collide::DistanceOutput {
+    distance(a, pa, b, pb, &mut SimplexCache::default()).expect("valid poses")
+}
+
+/// Compare GJK with the oracle on the cores of two polytope-cored shapes; returns the
+/// absolute distance error.
+fn oracle_error(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> f32 {
+    let out = fresh_distance(a, pa, b, pb);
+    let va = core_vertices(a, pa).expect("polytope core");
+    let vb = core_vertices(b, pb).expect("polytope core");
+    let o = brute_force_distance(va.points(), vb.points()).expect("non-empty");
+    let expected = (o.distance - a.radius() - b.radius()).max(0.0);
+    let err = (out.distance - expected).abs();
+    if expected > TOL {
+        // The separation vector of two convex sets is unique: compare it.
+        let dir = (o.point_b - o.point_a).normalize_or(Vec3::Y);
+        let gap = out.normal * out.distance - dir * expected;
+        assert!(gap.length() < 3.0 * TOL, "{gap:?} {out:?} {o:?}");
+        let v = out.point_b - out.point_a;
+        assert!((v.length() - out.distance).abs() < TOL, "{out:?}");
+    }
+    err
+}
+
+#[test]
+fn sphere_sphere_distance_and_points_are_analytic() {
+    let mut rng = SplitMix64::new(1);
+    for _ in 0..500 {
+        let (ra, rb) = (rng.range(0.1, 1.0), rng.range(0.1, 1.0));
+        let (a, b) = (Shape::sphere(ra).unwrap(), Shape::sphere(rb).unwrap());
+        let (pa, pb) = (random_pose(&mut rng, 2.0), random_pose(&mut rng, 2.0));
+        let out = fresh_distance(&a, &pa, &b, &pb);
+        let c = pb.position - pa.position;
+        let expected = (c.length() - ra - rb).max(0.0);
+        assert!((out.distance - expected).abs() < TOL, "{out:?} {expected}");
+        if c.length() > 1e-3 {
+            let n = c.normalize_or(Vec3::Y);
+            assert!((out.normal - n).length() < NORMAL_TOL);
+            assert!((out.point_a - (pa.position + n * ra)).length() < TOL);
+            assert!((out.point_b - (pb.position - n * rb)).length() < TOL);
+        }
+        assert_eq!(
+            out.status == GjkStatus::Overlapping,
+            c.length() <= 1e-5 * c.length().max(1.0)
+        );
+    }
+}
+
+#[test]
+fn sphere_box_distance_matches_point_box_clamp() {
+    let mut rng = SplitMix64::new(2);
+    let half = Vec3::new(0.8, 0.3, 0.5);
+    let cuboid = Shape::cuboid(half).unwrap();
+    for _ in 0..1000 {
+        let r = rng.range(0.05, 0.6);
+        let ball = Shape::sphere(r).unwrap();
+        let pose_box = random_pose(&mut rng, 1.0);
+        let pose_ball = random_pose(&mut rng, 2.5);
+        let out = fresh_distance(&cuboid, &pose_box, &ball, &pose_ball);
+        // Closest point of the box to the centre: clamp in the box frame.
+        let c = pose_box.inverse_transform_point(pose_ball.position);
+        let q = Vec3::new(
+            c.x.clamp(-half.x, half.x),
+            c.y.clamp(-half.y, half.y),
+            c.z.clamp(-half.z, half.z),
+        );
+        let outside = (c - q).length();
+        if outside <= 1e-3 {
+            continue; // centre inside or on the box: EPA's case
+        }
+        let expected = (outside - r).max(0.0);
+        assert!((out.distance - expected).abs() < TOL, "{out:?} {expected}");
+        let n = pose_box.transform_vector((c - q) * (1.0 / outside));
+        assert!((out.normal - n).length() < NORMAL_TOL, "{out:?} {n:?}");
+        assert!((out.point_a - pose_box.transform_point(q)).length() < TOL);
+        assert!((out.point_b - (pose_ball.position - n * r)).length() < TOL);
+    }
+}
+
+#[test]
+fn capsule_capsule_distance_matches_segment_closest_points() {
+    let mut rng = SplitMix64::new(3);
+    for _ in 0..1000 {
+        let (ha, ra) = (rng.range(0.1, 1.0), rng.range(0.05, 0.4));
+        let (hb, rb) = (rng.range(0.1, 1.0), rng.range(0.05, 0.4));
+        let a = Shape::capsule(ha, ra).unwrap();
+        let b = Shape::capsule(hb, rb).unwrap();
+        let (pa, pb) = (random_pose(&mut rng, 1.0), random_pose(&mut rng, 2.5));
+        let seg = |p: &Iso, h: f32| {
+            (
+                p.transform_point(Vec3::new(0.0, -h, 0.0)),
+                p.transform_point(Vec3::new(0.0, h, 0.0)),
+            )
+        };
+        let (p1, q1) = seg(&pa, ha);
+        let (p2, q2) = seg(&pb, hb);
+        let (s, t) = segment_closest_points(p1, q1, p2, q2);
+        let (ca, cb) = (p1 + (q1 - p1) * s, p2 + (q2 - p2) * t);
+        let core = (cb - ca).length();
+        let out = fresh_distance(&a, &pa, &b, &pb);
+        assert!(
+            (out.distance - (core - ra - rb).max(0.0)).abs() < TOL,
+            "{out:?} {core}"
+        );
+        if core > 1e-3 {
+            // The closest points may not be unique (parallel segments); the separation
+            // vector of the cores is.
+            let n = (cb - ca) * (1.0 / core);
+            assert!((out.normal - n).length() < NORMAL_TOL);
+            let core_gap = (out.point_b + out.normal * rb) - (out.point_a - out.normal * ra);
+            assert!((core_gap - (cb - ca)).length() < TOL * 2.0);
+        }
+    }
+}
+
+#[test]
+fn box_box_distance_matches_brute_force_oracle() {
+    let mut rng = SplitMix64::new(4);
+    let mut max_err: f32 = 0.0;
+    for _ in 0..1000 {
+        let a = Shape::cuboid(Vec3::new(
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+        ))
+        .unwrap();
+        let b = Shape::cuboid(Vec3::new(
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+        ))
+        .unwrap();
+        let (pa, pb) = (random_pose(&mut rng, 1.0), random_pose(&mut rng, 3.0));
+        max_err = max_err.max(oracle_error(&a, &pa, &b, &pb));
+    }
+    assert!(max_err < TOL, "max error {max_err}");
+}
+
+#[test]
+fn hull_hull_and_hull_box_distances_match_brute_force_oracle() {
+    let Some(hulls) = random_hulls(5, 16, 1.0) else {
+        panic!("ConvexHull::new refused random unit-sphere clouds");
+    };
+    let cuboid = Shape::cuboid(Vec3::new(0.7, 0.4, 0.5)).unwrap();
+    let mut rng = SplitMix64::new(6);
+    let mut max_err: f32 = 0.0;
+    for k in 0..1000 {
+        let a = Shape::hull(&hulls[k % hulls.len()]);
+        let b = if k % 4 == 0 {
+            cuboid
+        } else {
+            Shape::hull(&hulls[(k * 7 + 3) % hulls.len()])
+        };
+        let (pa, pb) = (random_pose(&mut rng, 1.0), random_pose(&mut rng, 3.5));
+        max_err = max_err.max(oracle_error(&a, &pa, &b, &pb));
+    }
+    assert!(max_err < TOL, "max error {max_err}");
+}
+
+#[test]
+fn half_space_distance_and_depth_are_closed_form() {
+    let mut rng = SplitMix64::new(7);
+    let ground = Shape::half_space(Vec3::Y).unwrap();
+    let half = Vec3::new(0.5, 0.25, 0.4);
+    let cuboid = Shape::cuboid(half).unwrap();
+    let ball = Shape::sphere(0.3).unwrap();
+    for _ in 0..500 {
+        let pose_ground = Iso::new(rng.unit_vector(), rng.rotation());
+        let n = pose_ground.transform_vector(Vec3::Y);
+        let pose_b = random_pose(&mut rng, 2.0);
+        // The box's lowest point along n: centre minus the box's extent along n.
+        let local_n = pose_b.inverse_transform_vector(n);
+        let extent = half.x * local_n.x.abs() + half.y * local_n.y.abs() + half.z * local_n.z.abs();
+        let height = n.dot(pose_b.position - pose_ground.position);
+        for (shape, below) in [(cuboid, extent), (ball, 0.3)] {
+            let s = height - below;
+            let out = fresh_distance(&ground, &pose_ground, &shape, &pose_b);
+            assert!((out.distance - s.max(0.0)).abs() < TOL);
+            assert!((out.normal - n).length() < NORMAL_TOL);
+            let swapped = fresh_distance(&shape, &pose_b, &ground, &pose_ground);
+            assert!((swapped.distance - out.distance).abs() < TOL);
+            assert!((swapped.normal + n).length() < NORMAL_TOL);
+            match penetration(&ground, &pose_ground, &shape, &pose_b).unwrap() {
+                Some(p) => {
+                    assert!(s <= 0.0);
+                    assert!((p.depth + s).abs() < TOL && (p.normal - n).length() < NORMAL_TOL);
+                }
+                None => assert!(s > 0.0),
+            }
+        }
+    }
+    // Two half-spaces: distance 0, overlapping, no finite depth.
+    let out = fresh_distance(
+        &ground,
+        &Iso::IDENTITY,
+        &ground,
+        &Iso::from_position(Vec3::Y),
+    );
+    assert_eq!((out.distance, out.status), (0.0, GjkStatus::Overlapping));
+    assert_eq!(
+        penetration(&ground, &Iso::IDENTITY, &ground, &Iso::IDENTITY),
+        Ok(None)
+    );
+}
+
+#[test]
+fn distance_is_symmetric_with_points_swapped() {
+    let hulls = random_hulls(8, 4, 0.8).expect("hulls build");
+    let shapes = [
+        Shape::sphere(0.3).unwrap(),
+        Shape::capsule(0.4, 0.2).unwrap(),
+        Shape::cuboid(Vec3::new(0.5, 0.3, 0.2)).unwrap(),
+        Shape::hull(&hulls[0]),
+        Shape::triangle(Vec3::ZERO, Vec3::X, Vec3::new(0.2, 0.0, 0.9)).unwrap(),
+    ];
+    let mut rng = SplitMix64::new(9);
+    for _ in 0..300 {
+        for a in &shapes {
+            let (pa, pb) = (random_pose(&mut rng, 1.0), random_pose(&mut rng, 3.0));
+            // Against a sphere the closest points are unique: they must swap exactly.
+            let b = &shapes[0];
+            let ab = fresh_distance(a, &pa, b, &pb);
+            let ba = fresh_distance(b, &pb, a, &pa);
+            assert!((ab.distance - ba.distance).abs() < TOL);
+            if ab.distance > TOL {
+                assert!((ab.normal + ba.normal).length() < NORMAL_TOL);
+                assert!((ab.point_a - ba.point_b).length() < TOL);
+                assert!((ab.point_b - ba.point_a).length() < TOL);
+            }
+            for b in &shapes {
+                let ab = fresh_distance(a, &pa, b, &pb);
+                let ba = fresh_distance(b, &pb, a, &pa);
+                assert!((ab.distance - ba.distance).abs() < TOL, "{ab:?} {ba:?}");
+                if ab.distance > TOL {
+                    let v = ab.normal * ab.distance + ba.normal * ba.distance;
+                    assert!(v.length() < 3.0 * TOL);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn epa_sphere_inside_box_depth_is_radius_plus_face_distance() {
+    let mut rng = SplitMix64::new(10);
+    let half = Vec3::new(1.0, 0.7, 0.5);
+    let cuboid = Shape::cuboid(half).unwrap();
+    for _ in 0..1000 {
+        let r = rng.range(0.05, 0.3);
+        let ball = Shape::sphere(r).unwrap();
+        let pose_box = random_pose(&mut rng, 1.0);
+        let c = Vec3::new(
+            rng.range(-0.95, 0.95) * half.x,
+            rng.range(-0.95, 0.95) * half.y,
+            rng.range(-0.95, 0.95) * half.z,
+        );
+        let pose_ball = Iso::new(pose_box.transform_point(c), rng.rotation());
+        // Nearest face: the axis with the least room h − |c|.
+        let room = [half.x - c.x.abs(), half.y - c.y.abs(), half.z - c.z.abs()];
+        let k = (0..3).min_by(|&i, &j| room[i].total_cmp(&room[j])).unwrap();
+        let mut axis = [Vec3::X, Vec3::Y, Vec3::Z][k];
+        if [c.x, c.y, c.z][k] < 0.0 {
+            axis = -axis;
+        }
+        let p = penetration(&cuboid, &pose_box, &ball, &pose_ball)
+            .unwrap()
+            .unwrap();
+        assert_eq!(p.status, EpaStatus::Converged);
+        assert!(
+            (p.depth - (r + room[k])).abs() < TOL,
+            "{p:?} {}",
+            r + room[k]
+        );
+        let unique = (0..3).all(|i| i == k || room[i] > room[k] + 1e-3);
+        if unique {
+            assert!((p.normal - pose_box.transform_vector(axis)).length() < NORMAL_TOL);
+        }
+        let swapped = penetration(&ball, &pose_ball, &cuboid, &pose_box)
+            .unwrap()
+            .unwrap();
+        assert!((swapped.depth - p.depth).abs() < TOL);
+    }
+}
+
+#[test]
+fn epa_box_box_face_overlap_depth_axis_aligned_and_rotated_about_the_normal() {
+    let mut rng = SplitMix64::new(11);
+    let a = Shape::cuboid(Vec3::new(1.0, 0.5, 0.8)).unwrap();
+    let b = Shape::cuboid(Vec3::new(0.4, 0.3, 0.35)).unwrap();
+    for k in 0..1000 {
+        let pose_a = random_pose(&mut rng, 1.0);
+        let depth = rng.range(0.01, 0.2);
+        let angle = if k % 2 == 0 {
+            0.0
+        } else {
+            rng.range(-3.1, 3.1)
+        };
+        // B sits on A's +Y face, sunk by `depth`, turned about A's Y (the contact normal).
+        // Its footprint stays well inside the face, so every other axis overlaps by
+        // more than 0.9 m and +Y is the unique minimum.
+        let local = Vec3::new(
+            rng.range(-0.3, 0.3),
+            0.5 + 0.3 - depth,
+            rng.range(-0.2, 0.2),
+        );
+        let pose_b = pose_a * Iso::new(local, Quat::from_axis_angle(Vec3::Y, angle));
+        let n = pose_a.transform_vector(Vec3::Y);
+        let p = penetration(&a, &pose_a, &b, &pose_b).unwrap().unwrap();
+        assert_eq!(p.status, EpaStatus::Converged);
+        assert!((p.depth - depth).abs() < TOL, "{p:?} {depth}");
+        assert!((p.normal - n).length() < NORMAL_TOL, "{p:?}");
+        let q = penetration(&b, &pose_b, &a, &pose_a).unwrap().unwrap();
+        assert!((q.depth - depth).abs() < TOL && (q.normal + n).length() < NORMAL_TOL);
+    }
+}
+
+#[test]
+fn epa_capsule_box_depth_through_the_top_face() {
+    let mut rng = SplitMix64::new(12);
+    let cuboid = Shape::cuboid(Vec3::new(1.0, 0.5, 1.0)).unwrap();
+    let capsule = Shape::capsule(0.5, 0.2).unwrap();
+    let lying = Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2);
+    let mut cores_overlap = 0;
+    for _ in 0..1000 {
+        let pose_box = random_pose(&mut rng, 1.0);
+        // A capsule lying along the box's x axis over its top face, sunk by `depth`:
+        // shallower than the radius only the round skin overlaps (GJK's answer); deeper,
+        // the core segment is inside the box (EPA's answer). The top face stays nearest.
+        let depth = rng.range(0.02, 0.6);
+        let local = Vec3::new(
+            rng.range(-0.3, 0.3),
+            0.5 + 0.2 - depth,
+            rng.range(-0.3, 0.3),
+        );
+        let pose_capsule = pose_box * Iso::new(local, lying);
+        let p = penetration(&cuboid, &pose_box, &capsule, &pose_capsule)
+            .unwrap()
+            .unwrap();
+        assert_eq!(p.status, EpaStatus::Converged);
+        assert!((p.depth - depth).abs() < TOL, "{p:?} {depth}");
+        assert!((p.normal - pose_box.transform_vector(Vec3::Y)).length() < NORMAL_TOL);
+        let q = penetration(&capsule, &pose_capsule, &cuboid, &pose_box)
+            .unwrap()
+            .unwrap();
+        assert!((q.depth - p.depth).abs() < TOL && (q.normal + p.normal).length() < NORMAL_TOL);
+        if depth > 0.2 + 1e-3 {
+            cores_overlap += 1;
+            let d = fresh_distance(&cuboid, &pose_box, &capsule, &pose_capsule);
+            assert_eq!(d.status, GjkStatus::Overlapping);
+        }
+    }
+    assert!(cores_overlap > 300, "both paths exercised");
+}
+
+#[test]
+fn epa_is_symmetric_for_random_overlaps() {
+    let hulls = random_hulls(13, 8, 0.9).expect("hulls build");
+    let cuboid = Shape::cuboid(Vec3::new(0.6, 0.4, 0.5)).unwrap();
+    let mut rng = SplitMix64::new(14);
+    let mut checked = 0;
+    for k in 0..1000 {
+        let a = Shape::hull(&hulls[k % 8]);
+        let b = if k % 2 == 0 {
+            cuboid
+        } else {
+            Shape::hull(&hulls[(k / 2) % 8])
+        };
+        let (pa, pb) = (random_pose(&mut rng, 0.5), random_pose(&mut rng, 1.0));
+        let Some(p) = penetration(&a, &pa, &b, &pb).unwrap() else {
+            continue;
+        };
+        let q = penetration(&b, &pb, &a, &pa)
+            .unwrap()
+            .expect("symmetric overlap");
+        assert_eq!(
+            (p.status, q.status),
+            (EpaStatus::Converged, EpaStatus::Converged)
+        );
+        assert!((p.depth - q.depth).abs() < TOL, "{p:?} {q:?}");
+        checked += 1;
+    }
+    assert!(checked > 500);
+}
+
+#[test]
+fn warm_start_gives_the_same_answer_in_no_more_iterations() {
+    let hulls = random_hulls(15, 8, 1.0).expect("hulls build");
+    let cuboid = Shape::cuboid(Vec3::new(0.6, 0.4, 0.5)).unwrap();
+    let mut rng = SplitMix64::new(16);
+    let (mut cold_total, mut warm_total) = (0u32, 0u32);
+    for k in 0..1000 {
+        let a = Shape::hull(&hulls[k % 8]);
+        let b = if k % 3 == 0 {
+            cuboid
+        } else {
+            Shape::hull(&hulls[(k + 5) % 8])
+        };
+        let (pa, pb) = (random_pose(&mut rng, 0.5), random_pose(&mut rng, 3.0));
+        let mut cache = SimplexCache::default();
+        let cold = distance(&a, &pa, &b, &pb, &mut cache).unwrap();
+        assert!(cache.count >= 1 && cache.count <= 4);
+        // Same pose with the cache: the same answer, never more iterations.
+        let warm = distance(&a, &pa, &b, &pb, &mut cache).unwrap();
+        assert!((warm.distance - cold.distance).abs() < TOL);
+        assert!(warm.iterations <= cold.iterations, "{warm:?} {cold:?}");
+        // 1 mm further on: the answer of a cold start, in fewer iterations on average.
+        let moved = Iso::new(pb.position + rng.unit_vector() * 1e-3, pb.rotation);
+        let warm = distance(&a, &pa, &b, &moved, &mut cache).unwrap();
+        let cold = fresh_distance(&a, &pa, &b, &moved);
+        assert!((warm.distance - cold.distance).abs() < TOL);
+        cold_total += cold.iterations;
+        warm_total += warm.iterations;
+    }
+    assert!(
+        warm_total < cold_total,
+        "warm {warm_total} cold {cold_total}"
+    );
+}
+
+#[test]
+fn properties_hold_for_every_shape_pair_under_random_poses() {
+    let hulls = random_hulls(17, 2, 0.7).expect("hulls build");
+    let shapes = [
+        Shape::sphere(0.4).unwrap(),
+        Shape::capsule(0.5, 0.2).unwrap(),
+        Shape::cuboid(Vec3::new(0.6, 0.3, 0.45)).unwrap(),
+        Shape::hull(&hulls[0]),
+        Shape::hull(&hulls[1]),
+        Shape::triangle(
+            Vec3::new(-0.5, 0.0, -0.4),
+            Vec3::new(0.6, 0.1, 0.0),
+            Vec3::new(0.0, -0.1, 0.7),
+        )
+        .unwrap(),
+        Shape::half_space(Vec3::new(0.1, 1.0, 0.0)).unwrap(),
+    ];
+    let mut rng = SplitMix64::new(18);
+    for round in 0..40 {
+        for a in &shapes {
+            for b in &shapes {
+                let reach = if round % 2 == 0 { 0.8 } else { 2.0 };
+                let (pa, pb) = (random_pose(&mut rng, reach), random_pose(&mut rng, reach));
+                assert_eq!(
+                    distance_properties(a, &pa, b, &pb),
+                    Ok(()),
+                    "{a:?} {pa:?} {b:?} {pb:?}"
+                );
+                assert_eq!(
+                    penetration_properties(a, &pa, b, &pb),
+                    Ok(()),
+                    "{a:?} {pa:?} {b:?} {pb:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn touching_and_degenerate_contacts_keep_the_properties() {
+    // Exactly touching faces, crossing capsule axes, concentric spheres, a sphere centred
+    // on a triangle, coincident boxes: the cases where D is flat or the origin is on it.
+    let cuboid = Shape::cuboid(Vec3::new(0.5, 0.5, 0.5)).unwrap();
+    let capsule = Shape::capsule(0.5, 0.1).unwrap();
+    let ball = Shape::sphere(0.25).unwrap();
+    let tri = Shape::triangle(
+        Vec3::new(-1.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, -1.0),
+        Vec3::new(0.0, 0.0, 1.0),
+    )
+    .unwrap();
+    let turned = Quat::from_axis_angle(Vec3::X, core::f32::consts::FRAC_PI_2);
+    let cases = [
+        (
+            cuboid,
+            Iso::IDENTITY,
+            cuboid,
+            Iso::from_position(Vec3::new(0.0, 1.0, 0.0)),
+        ),
+        (
+            cuboid,
+            Iso::IDENTITY,
+            cuboid,
+            Iso::from_position(Vec3::new(1.0, 1.0, 1.0)),
+        ),
+        (cuboid, Iso::IDENTITY, cuboid, Iso::IDENTITY),
+        (
+            capsule,
+            Iso::IDENTITY,
+            capsule,
+            Iso::new(Vec3::ZERO, turned),
+        ),
+        (ball, Iso::IDENTITY, ball, Iso::IDENTITY),
+        (tri, Iso::IDENTITY, ball, Iso::IDENTITY),
+        (tri, Iso::IDENTITY, tri, Iso::IDENTITY),
+        (ball, Iso::IDENTITY, capsule, Iso::IDENTITY),
+    ];
+    for (a, pa, b, pb) in cases {
+        assert_eq!(
+            distance_properties(&a, &pa, &b, &pb),
+            Ok(()),
+            "{a:?} {b:?} {pb:?}"
+        );
+        assert_eq!(
+            penetration_properties(&a, &pa, &b, &pb),
+            Ok(()),
+            "{a:?} {b:?} {pb:?}"
+        );
+        assert!(intersects(&a, &pa, &b, &pb).unwrap());
+    }
+    // Coincident unit boxes: the depth is the full width, 1 m.
+    let p = penetration(&cuboid, &Iso::IDENTITY, &cuboid, &Iso::IDENTITY)
+        .unwrap()
+        .unwrap();
+    assert!((p.depth - 1.0).abs() < TOL, "{p:?}");
+    // Concentric spheres: depth is the sum of the radii, along some unit normal.
+    let p = penetration(&ball, &Iso::IDENTITY, &ball, &Iso::IDENTITY)
+        .unwrap()
+        .unwrap();
+    assert!((p.depth - 0.5).abs() < TOL && (p.normal.length() - 1.0).abs() < 1e-6);
+}
+
+#[test]
+fn invalid_poses_are_refused() {
+    let s = Shape::sphere(1.0).unwrap();
+    let bad = [
+        Iso::from_position(Vec3::new(f32::NAN, 0.0, 0.0)),
+        Iso::from_position(Vec3::new(0.0, f32::INFINITY, 0.0)),
+        Iso::new(Vec3::ZERO, Quat::from_xyzw(0.0, 0.0, 0.0, 2.0)),
+        Iso::new(Vec3::ZERO, Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0)),
+    ];
+    for p in bad {
+        assert!(distance(&s, &p, &s, &Iso::IDENTITY, &mut SimplexCache::default()).is_err());
+        assert!(penetration(&s, &Iso::IDENTITY, &s, &p).is_err());
+        assert!(intersects(&s, &p, &s, &Iso::IDENTITY).is_err());
+        assert_eq!(distance_properties(&s, &p, &s, &Iso::IDENTITY), Ok(()));
+        assert_eq!(penetration_properties(&s, &Iso::IDENTITY, &s, &p), Ok(()));
+    }
+}
+
+/// The narrow-phase benchmark query sets (`shared/SCENES.md`; same seeds and draw order
+/// as `benches/narrow_phase.rs`): every answer agrees with the oracle, EPA always
+/// converges, and the iteration counts stay below their caps. Run with `--nocapture` to
+/// see the figures.
+#[test]
+fn benchmark_query_sets_agree_with_the_oracle() {
+    const PAIRS: usize = 4096;
+    let mut rng = SplitMix64::new(0x4855_4c4c_5345_5421);
+    let hulls: Vec<ConvexHull> = (0..64)
+        .map(|_| ConvexHull::new(&hull_cloud(&mut rng, 1.0)).expect("hull builds"))
+        .collect();
+    let ball = Shape::sphere(0.5).unwrap();
+    let cuboid = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+    let sets: [(&str, u64, (f32, f32)); 3] = [
+        ("hull-hull", 1, (1.0, 2.2)),
+        ("ball-box", 2, (0.6, 1.4)),
+        ("box-box", 3, (0.8, 1.6)),
+    ];
+    for (name, seed, (d_min, d_max)) in sets {
+        let mut rng = SplitMix64::new(seed);
+        let count = if name == "hull-hull" { 64 } else { 1 };
+        let (mut gjk_iters, mut epa_iters, mut epa_runs, mut epa_max) = (0u32, 0u32, 0u32, 0u32);
+        let mut overlaps = 0;
+        let mut max_err: f32 = 0.0;
+        for _ in 0..PAIRS {
+            let pa = Iso::new(Vec3::ZERO, rng.rotation());
+            let dir = rng.unit_vector();
+            let d = rng.range(d_min, d_max);
+            let pb = Iso::new(dir * d, rng.rotation());
+            let (ia, ib) = (
+                (rng.next_u64() % count) as usize,
+                (rng.next_u64() % count) as usize,
+            );
+            let (a, b) = match name {
+                "hull-hull" => (Shape::hull(&hulls[ia]), Shape::hull(&hulls[ib])),
+                "ball-box" => (ball, cuboid),
+                _ => (cuboid, cuboid),
+            };
+            let out = fresh_distance(&a, &pa, &b, &pb);
+            assert!(
+                out.iterations <= MAX_GJK_ITERATIONS && out.status != GjkStatus::IterationLimit
+            );
+            gjk_iters += out.iterations;
+            max_err = max_err.max(oracle_error(&a, &pa, &b, &pb));
+            if let Some(p) = penetration(&a, &pa, &b, &pb).unwrap() {
+                overlaps += 1;
+                assert_eq!(p.status, EpaStatus::Converged, "{p:?}");
+                if p.iterations > 0 {
+                    epa_runs += 1;
+                    epa_iters += p.iterations;
+                    epa_max = epa_max.max(p.iterations);
+                }
+            }
+        }
+        eprintln!(
+            "{name}: max |GJK − oracle| {max_err:.2e} m, mean GJK iterations {:.2}, \
+             {overlaps} overlaps, EPA runs {epa_runs}, mean EPA iterations {:.2}, max {epa_max}",
+            gjk_iters as f32 / PAIRS as f32,
+            epa_iters as f32 / epa_runs.max(1) as f32,
+        );
+        assert!(max_err < TOL, "{name}: {max_err}");
+        assert!(
+            overlaps > PAIRS / 10,
+            "{name}: the set has overlapping pairs"
+        );
+        assert!(epa_max < 48, "{name}: EPA needed {epa_max} iterations");
+    }
+}
+
+/// A coordinate on a grid: `n · unit` with `n` uniform in `[−range, range]`.
+fn grid(rng: &mut SplitMix64, range: u64, unit: f32) -> f32 {
+    (rng.next_u64() % (2 * range + 1)) as f32 * unit - range as f32 * unit
+}
+
+/// The fuzz target's hard cases on stable: grid coordinates (faces line up, exact
+/// touching, duplicate and nearly coplanar hull points), sizes from 0.1 mm to 1 m, axis
+/// rotations, and one pair in ten 375 m from the origin. Every property holds.
+#[test]
+fn properties_hold_on_grid_aligned_and_degenerate_inputs() {
+    let mut rng = SplitMix64::new(19);
+    let mut checked = 0;
+    for _ in 0..6000 {
+        let mut hulls = [None, None];
+        for h in hulls.iter_mut() {
+            let flat = rng.next_u64().is_multiple_of(3);
+            let n = 4 + (rng.next_u64() % 12) as usize;
+            let pts: Vec<Vec3> = (0..n)
+                .map(|_| {
+                    let y = if flat {
+                        grid(&mut rng, 1, 0.01)
+                    } else {
+                        grid(&mut rng, 8, 0.125)
+                    };
+                    Vec3::new(grid(&mut rng, 8, 0.125), y, grid(&mut rng, 8, 0.125))
+                })
+                .collect();
+            *h = ConvexHull::new(&pts).ok();
+        }
+        let mut shapes = [None, None];
+        for (k, s) in shapes.iter_mut().enumerate() {
+            let unit = [1.0 / 8192.0, 1.0 / 16.0, 1.0e-4][(rng.next_u64() % 3) as usize];
+            let mut size = || ((rng.next_u64() % 100) as f32 + 1.0) * unit;
+            let (x, y, z) = (size(), size(), size());
+            let mut corner = || {
+                Vec3::new(
+                    grid(&mut rng, 8, 0.125),
+                    grid(&mut rng, 8, 0.125),
+                    grid(&mut rng, 8, 0.125),
+                )
+            };
+            let (c0, c1, c2) = (corner(), corner(), corner());
+            *s = match rng.next_u64() % 6 {
+                0 => Shape::sphere(x).ok(),
+                1 => Shape::capsule(x, y).ok(),
+                2 => Shape::cuboid(Vec3::new(x, y, z)).ok(),
+                3 => hulls[k].as_ref().map(Shape::hull),
+                4 => Shape::triangle(c0, c1, c2).ok(),
+                _ => Shape::half_space(Vec3::new(
+                    grid(&mut rng, 2, 1.0),
+                    grid(&mut rng, 2, 1.0),
+                    1.0,
+                ))
+                .ok(),
+            };
+        }
+        let [Some(a), Some(b)] = shapes else {
+            continue;
+        };
+        let mut pose = || {
+            let rotation = match rng.next_u64() % 3 {
+                0 => Quat::IDENTITY,
+                1 => Quat::from_xyzw(
+                    grid(&mut rng, 2, 1.0),
+                    grid(&mut rng, 2, 1.0),
+                    grid(&mut rng, 2, 1.0),
+                    1.0,
+                )
+                .normalize(),
+                _ => rng.rotation(),
+            };
+            let far = if rng.next_u64().is_multiple_of(10) {
+                Vec3::new(300.0, -200.0, 100.0)
+            } else {
+                Vec3::ZERO
+            };
+            let unit = if rng.next_u64().is_multiple_of(4) {
+                1.0 / 1024.0
+            } else {
+                1.0 / 16.0
+            };
+            let p = Vec3::new(
+                grid(&mut rng, 16, unit),
+                grid(&mut rng, 16, unit),
+                grid(&mut rng, 16, unit),
+            );
+            Iso::new(far + p, rotation)
+        };
+        let (pa, pb) = (pose(), pose());
+        assert_eq!(
+            distance_properties(&a, &pa, &b, &pb),
+            Ok(()),
+            "{a:?} {pa:?} {b:?} {pb:?}"
+        );
+        assert_eq!(
+            penetration_properties(&a, &pa, &b, &pb),
+            Ok(()),
+            "{a:?} {pa:?} {b:?} {pb:?}"
+        );
+        checked += 1;
+    }
+    assert!(checked > 4000, "{checked}");
+}
