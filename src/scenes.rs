@@ -372,6 +372,26 @@ pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
     first.ok_or(Error::OutOfRange(crate::Input::Config))
 }
 
+/// The step at which the cross-target snapshot of the `mixed` scene is taken
+/// (`tests/golden/mixed_500.snap`).
+pub const SNAPSHOT_STEP: u64 = 500;
+
+/// Restore `snapshot` into `world` (hull shapes looked up in `hulls`) and step it until
+/// its step counter reaches `scene.steps()`; returns the checksum. The snapshot may come
+/// from another target: a match with the golden checksum proves the state crossed intact.
+pub fn continue_from_snapshot<'a, const B: usize, const C: usize, const E: usize>(
+    scene: Scene,
+    world: &mut World<'a, B, C, E>,
+    hulls: &'a [ConvexHull],
+    snapshot: &[u8],
+) -> Result<u64, Error> {
+    world.restore_with_hulls(snapshot, hulls)?;
+    while world.step_count() < scene.steps() as u64 {
+        world.step();
+    }
+    Ok(world.checksum())
+}
+
 /// Bullets fired in the `bullets` scene.
 pub const BULLETS: usize = 12;
 

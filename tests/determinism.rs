@@ -2,19 +2,49 @@
 //! `tests/golden/checksums.txt` — in debug and in release, and (through `.ci/run`) on
 //! Cortex-M under QEMU and on wasm32 under Node, which print the same lines.
 //!
+//! `tests/golden/mixed_500.snap` is a snapshot of the `mixed` scene at step 500 taken on
+//! the host; every target restores it, finishes the run and must reach the golden `mixed`
+//! checksum (a snapshot crosses targets intact).
+//!
 //! To regenerate after an intended change: `CAROM_BLESS=1 cargo test --test determinism`
-//! prints the new lines; say why in the commit message.
+//! rewrites both files; say why in the commit message.
 
 use carom::scenes::{self, ReferenceWorld, Scene};
 use carom::{ConvexHull, Vec3};
 
-fn reference_line(scene: Scene) -> String {
-    let mut hulls = [ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
-        scenes::REFERENCE_HULLS];
+const GOLDEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/checksums.txt");
+const SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/mixed_500.snap");
+
+fn reference_hulls() -> Vec<ConvexHull> {
+    let tetra = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
+    let mut hulls = vec![tetra; scenes::REFERENCE_HULLS];
     scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
-    let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
-    let sum = scene.run(&mut world, &hulls).unwrap();
+    hulls
+}
+
+fn line(scene: Scene, sum: u64) -> String {
     format!("{} {} {:#018x}", scene.name(), scene.steps(), sum)
+}
+
+fn reference_line(scene: Scene) -> String {
+    let hulls = reference_hulls();
+    let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
+    line(scene, scene.run(&mut world, &hulls).unwrap())
+}
+
+/// The mixed scene's snapshot at [`scenes::SNAPSHOT_STEP`].
+fn mixed_snapshot() -> Vec<u8> {
+    let hulls = reference_hulls();
+    let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
+    world.set_config(Scene::Mixed.config()).unwrap();
+    Scene::Mixed.build(&mut world, &hulls).unwrap();
+    while world.step_count() < scenes::SNAPSHOT_STEP {
+        world.step();
+    }
+    let mut buf = vec![0u8; world.snapshot_len()];
+    let n = world.snapshot(&mut buf).unwrap();
+    buf.truncate(n);
+    buf
 }
 
 fn run_on_big_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -> T {
@@ -26,6 +56,10 @@ fn run_on_big_stack<T: Send + 'static>(f: impl FnOnce() -> T + Send + 'static) -
         .unwrap()
 }
 
+fn bless() -> bool {
+    std::env::var_os("CAROM_BLESS").is_some()
+}
+
 #[test]
 fn reference_scenes_match_the_golden_checksums() {
     let lines: Vec<String> = run_on_big_stack(|| {
@@ -34,17 +68,41 @@ fn reference_scenes_match_the_golden_checksums() {
             .map(|s| reference_line(*s))
             .collect()
     });
-    let golden = include_str!("golden/checksums.txt");
-    let expected: Vec<&str> = golden.lines().filter(|l| !l.trim().is_empty()).collect();
-    if std::env::var_os("CAROM_BLESS").is_some() {
-        for l in &lines {
-            println!("{l}");
-        }
+    if bless() {
+        std::fs::write(GOLDEN, lines.join("\n") + "\n").unwrap();
         return;
     }
+    let golden = std::fs::read_to_string(GOLDEN).unwrap();
+    let expected: Vec<&str> = golden.lines().filter(|l| !l.trim().is_empty()).collect();
     assert_eq!(
         lines, expected,
         "golden checksums changed: see tests/determinism.rs"
+    );
+}
+
+#[test]
+fn the_host_snapshot_is_byte_identical_and_continues_to_the_golden_checksum() {
+    let snap = run_on_big_stack(mixed_snapshot);
+    if bless() {
+        std::fs::write(SNAPSHOT, &snap).unwrap();
+        return;
+    }
+    let stored = std::fs::read(SNAPSHOT).unwrap();
+    assert!(
+        snap == stored,
+        "the snapshot format or the simulation changed: re-bless"
+    );
+    let finished = run_on_big_stack(move || {
+        let hulls = reference_hulls();
+        let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
+        let sum =
+            scenes::continue_from_snapshot(Scene::Mixed, &mut world, &hulls, &stored).unwrap();
+        line(Scene::Mixed, sum)
+    });
+    let golden = std::fs::read_to_string(GOLDEN).unwrap();
+    assert!(
+        golden.lines().any(|l| l == finished),
+        "{finished} not in the golden file"
     );
 }
 

@@ -410,19 +410,14 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
 }
 
 fn put_point(s: &mut impl Sink, p: &ContactPoint) {
+    // Solver scratch (lever arms, effective masses, targets) is rebuilt by the next
+    // step's prepare, so only the persistent part is stored.
     s.u64(p.id);
     s.vec3(p.local_a);
     s.vec3(p.local_b);
     s.f32(p.separation);
     s.f32(p.normal_impulse);
     s.vec3(p.tangent_impulse);
-    s.vec3(p.r_a);
-    s.vec3(p.r_b);
-    s.f32(p.normal_mass);
-    s.f32(p.tangent_mass[0]);
-    s.f32(p.tangent_mass[1]);
-    s.f32(p.restitution_velocity);
-    s.f32(p.approach_speed);
     s.u8(p.sticking as u8);
 }
 
@@ -434,13 +429,8 @@ fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
         separation: r.f32()?,
         normal_impulse: r.f32()?,
         tangent_impulse: r.vec3()?,
-        r_a: r.vec3()?,
-        r_b: r.vec3()?,
-        normal_mass: r.f32()?,
-        tangent_mass: [r.f32()?, r.f32()?],
-        restitution_velocity: r.f32()?,
-        approach_speed: r.f32()?,
         sticking: r.bool()?,
+        ..ContactPoint::default()
     })
 }
 
@@ -451,7 +441,7 @@ fn put_contact(s: &mut impl Sink, c: &Contact) {
     s.vec3(c.tangents[0]);
     s.vec3(c.tangents[1]);
     s.u8(c.len);
-    for p in c.points.iter() {
+    for p in c.points.iter().take(c.len as usize) {
         put_point(s, p);
     }
     put_material(s, &c.material);
@@ -468,7 +458,7 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
         return Err(SnapshotError::Corrupt);
     }
     let mut points = [ContactPoint::default(); 4];
-    for p in points.iter_mut() {
+    for p in points.iter_mut().take(len as usize) {
         *p = get_point(r)?;
     }
     Ok(Contact {
@@ -561,7 +551,13 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             }
         }
         let mut contact = Counter(0);
-        put_contact(&mut contact, &Contact::default());
+        put_contact(
+            &mut contact,
+            &Contact {
+                len: 4,
+                ..Contact::default()
+            },
+        );
         let mut config = Counter(0);
         put_config(&mut config, &WorldConfig::DEFAULT);
         HEADER_LEN
