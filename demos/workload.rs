@@ -1,0 +1,255 @@
+//! The cross-target narrow-phase workload: one definition, run by the Cortex-M firmware
+//! (under QEMU), the WASM demo (under Node) and the host build, which must all print the
+//! same line
+//!
+//! ```text
+//! narrow 256 0x<16 hex digits>
+//! ```
+//!
+//! The hex number is an FNV-1a 64 hash of the bits of every input pose and every output
+//! number of `carom::collide::distance` and `carom::collide::contact`, so one flipped bit
+//! anywhere on any target changes the line.
+//!
+//! This file is `core`-only (no `std`, no `alloc`) and is included with `#[path]` by
+//! `demos/cortex-m/src/main.rs` and `demos/wasm/src/main.rs`. It belongs in the crate's
+//! shared scenes module (`carom::scenes`) once that exists; the line must not change when
+//! it moves.
+//!
+//! Canonical hashing: `-0.0` is hashed as `+0.0` (targets may differ in the sign of a zero
+//! without differing in value), and every NaN as the one quiet NaN `0x7fc0_0000` (NaN
+//! payloads are not portable, e.g. on wasm32). A NaN still changes the hash, so it is
+//! still caught.
+
+use carom::collide::{contact, distance, GjkStatus, Manifold, SimplexCache};
+use carom::math::{Iso, Vec3};
+use carom::rng::SplitMix64;
+use carom::shape::{ConvexHull, Shape};
+
+/// Seed of the workload's generator (ASCII "carom!").
+pub const WORKLOAD_SEED: u64 = 0x6361_726f_6d21;
+/// Number of shape pairs the workload queries.
+pub const WORKLOAD_PAIRS: u32 = 256;
+/// Speculative margin passed to `contact` (m).
+pub const WORKLOAD_MARGIN: f32 = 0.02;
+/// Number of distinct hulls the pairs draw from.
+const HULLS: usize = 4;
+/// Points per hull, random on the unit sphere.
+const HULL_POINTS: usize = 16;
+
+/// Tags hashed in place of values that are not numbers (which branch a result took).
+const TAG_ERR: u32 = 0xE000_0000;
+const TAG_NONE: u32 = 0xA000_0000;
+const TAG_SOME: u32 = 0xB000_0000;
+
+/// FNV-1a, 64-bit (Fowler, Noll, Vo): `h = (h ^ byte) · 0x100000001b3`, from the offset
+/// basis `0xcbf29ce484222325`. Bytes are fed little-endian, so the hash does not depend on
+/// the target's byte order.
+pub struct Fnv1a64(u64);
+
+impl Fnv1a64 {
+    /// A hash at the FNV offset basis.
+    pub const fn new() -> Fnv1a64 {
+        Fnv1a64(0xcbf2_9ce4_8422_2325)
+    }
+
+    /// Feed one byte.
+    pub fn write_u8(&mut self, byte: u8) {
+        self.0 = (self.0 ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+
+    /// Feed a `u32`, little-endian.
+    pub fn write_u32(&mut self, x: u32) {
+        for b in x.to_le_bytes() {
+            self.write_u8(b);
+        }
+    }
+
+    /// Feed a `u64`, little-endian.
+    pub fn write_u64(&mut self, x: u64) {
+        for b in x.to_le_bytes() {
+            self.write_u8(b);
+        }
+    }
+
+    /// Feed the bits of `x`, with `-0.0` as `+0.0` and every NaN as `0x7fc0_0000`.
+    pub fn write_f32(&mut self, x: f32) {
+        let bits = if x.is_nan() {
+            0x7fc0_0000
+        } else if x == 0.0 {
+            0
+        } else {
+            x.to_bits()
+        };
+        self.write_u32(bits);
+    }
+
+    /// Feed a vector, x then y then z.
+    pub fn write_vec3(&mut self, v: Vec3) {
+        self.write_f32(v.x);
+        self.write_f32(v.y);
+        self.write_f32(v.z);
+    }
+
+    /// Feed a pose: position, then the rotation's x, y, z, w.
+    pub fn write_iso(&mut self, iso: &Iso) {
+        self.write_vec3(iso.position);
+        self.write_f32(iso.rotation.x);
+        self.write_f32(iso.rotation.y);
+        self.write_f32(iso.rotation.z);
+        self.write_f32(iso.rotation.w);
+    }
+
+    /// The hash so far.
+    pub const fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// What the workload did: how many pairs it ran and the hash of everything it saw.
+/// `Display` prints the line the demos compare: `narrow <count> 0x<hash>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct WorkloadResult {
+    /// Pairs queried.
+    pub count: u32,
+    /// FNV-1a 64 of the inputs and results.
+    pub hash: u64,
+}
+
+impl core::fmt::Display for WorkloadResult {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "narrow {} 0x{:016x}", self.count, self.hash)
+    }
+}
+
+/// The random hulls the pairs draw from: 16 points on the unit sphere each. A hull that
+/// does not build (an error is a deterministic outcome too) stays `None` and its pairs use
+/// a unit cube instead; the error is hashed by the caller through `hull_built`.
+fn build_hulls(rng: &mut SplitMix64) -> [Option<ConvexHull>; HULLS] {
+    let mut hulls = [None; HULLS];
+    for slot in hulls.iter_mut() {
+        let mut points = [Vec3::ZERO; HULL_POINTS];
+        for p in points.iter_mut() {
+            *p = rng.unit_vector();
+        }
+        *slot = ConvexHull::new(&points).ok();
+    }
+    hulls
+}
+
+/// A random shape: kind 0 sphere (r in [0.2, 0.8) m), 1 capsule (half height and radius
+/// in [0.1, 0.5) m), 2 box (half-extents in [0.2, 0.8) m), 3 one of the hulls (about
+/// unit radius). Constructor errors fall back to a 0.5 m sphere, hashing `TAG_ERR`.
+fn random_shape<'h>(
+    rng: &mut SplitMix64,
+    hulls: &'h [Option<ConvexHull>; HULLS],
+    hash: &mut Fnv1a64,
+) -> Shape<'h> {
+    let kind = (rng.next_u64() % 4) as u32;
+    hash.write_u32(kind);
+    let built = match kind {
+        0 => Shape::sphere(rng.range(0.2, 0.8)),
+        1 => {
+            let half_height = rng.range(0.1, 0.5);
+            Shape::capsule(half_height, rng.range(0.1, 0.5))
+        }
+        2 => {
+            let x = rng.range(0.2, 0.8);
+            let y = rng.range(0.2, 0.8);
+            Shape::cuboid(Vec3::new(x, y, rng.range(0.2, 0.8)))
+        }
+        _ => {
+            let index = (rng.next_u64() % HULLS as u64) as usize;
+            hash.write_u32(index as u32);
+            match hulls.get(index) {
+                Some(Some(h)) => Ok(Shape::hull(h)),
+                _ => Shape::cuboid(Vec3::splat(0.5)),
+            }
+        }
+    };
+    match built {
+        Ok(shape) => shape,
+        Err(_) => {
+            hash.write_u32(TAG_ERR);
+            Shape::Sphere(carom::shape::Sphere { radius: 0.5 })
+        }
+    }
+}
+
+/// GJK status as a number for hashing.
+fn gjk_status_code(s: GjkStatus) -> u32 {
+    match s {
+        GjkStatus::Separated => 1,
+        GjkStatus::Overlapping => 2,
+        GjkStatus::IterationLimit => 3,
+    }
+}
+
+/// Hash a manifold: normal, point count, then each point's numbers and feature ids.
+fn hash_manifold(m: &Manifold, hash: &mut Fnv1a64) {
+    hash.write_u32(TAG_SOME);
+    hash.write_vec3(m.normal);
+    hash.write_u32(u32::from(m.len));
+    for p in m.points() {
+        hash.write_vec3(p.point_a);
+        hash.write_vec3(p.point_b);
+        hash.write_vec3(p.local_a);
+        hash.write_vec3(p.local_b);
+        hash.write_f32(p.separation);
+        hash.write_u64(p.id.key());
+    }
+}
+
+/// Run the workload: [`WORKLOAD_PAIRS`] seeded random pairs of spheres, capsules, boxes
+/// and hulls, A anywhere in a 4 m cube with a random rotation, B at a centre distance in
+/// [0.5, 2.0) m from A in a random direction with its own random rotation (from deep
+/// overlap to well apart). For each pair: `distance` from a cold cache, then `contact`
+/// with a 2 cm margin.
+pub fn run_narrow_workload() -> WorkloadResult {
+    let mut rng = SplitMix64::new(WORKLOAD_SEED);
+    let mut hash = Fnv1a64::new();
+    let hulls = build_hulls(&mut rng);
+    for h in hulls.iter() {
+        hash.write_u32(match h {
+            Some(h) => h.vertices().len() as u32,
+            None => TAG_ERR,
+        });
+    }
+    let mut count = 0;
+    for _ in 0..WORKLOAD_PAIRS {
+        let a = random_shape(&mut rng, &hulls, &mut hash);
+        let b = random_shape(&mut rng, &hulls, &mut hash);
+        let pos_a = Vec3::new(
+            rng.range(-2.0, 2.0),
+            rng.range(-2.0, 2.0),
+            rng.range(-2.0, 2.0),
+        );
+        let pose_a = Iso::new(pos_a, rng.rotation());
+        let offset = rng.unit_vector() * rng.range(0.5, 2.0);
+        let pose_b = Iso::new(pos_a + offset, rng.rotation());
+        hash.write_iso(&pose_a);
+        hash.write_iso(&pose_b);
+
+        let mut cache = SimplexCache::default();
+        match distance(&a, &pose_a, &b, &pose_b, &mut cache) {
+            Ok(d) => {
+                hash.write_f32(d.distance);
+                hash.write_vec3(d.point_a);
+                hash.write_vec3(d.point_b);
+                hash.write_vec3(d.normal);
+                hash.write_u32(d.iterations);
+                hash.write_u32(gjk_status_code(d.status));
+            }
+            Err(_) => hash.write_u32(TAG_ERR),
+        }
+        match contact(&a, &pose_a, &b, &pose_b, WORKLOAD_MARGIN) {
+            Ok(Some(m)) => hash_manifold(&m, &mut hash),
+            Ok(None) => hash.write_u32(TAG_NONE),
+            Err(_) => hash.write_u32(TAG_ERR),
+        }
+        count += 1;
+    }
+    WorkloadResult {
+        count,
+        hash: hash.finish(),
+    }
+}
