@@ -33,7 +33,8 @@
 #![deny(missing_docs)]
 #![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
 
-#[cfg(test)]
+// Tests use std; so does the code `arbitrary`'s derive generates (a host-only feature).
+#[cfg(any(test, feature = "arbitrary"))]
 extern crate std;
 
 /// The README's example, compiled and run as a doctest.
