@@ -56,8 +56,10 @@ mod world;
 pub use config::WorldConfig;
 pub use dynamics::body::{BodyDesc, BodyKind, MassSpec, Material};
 pub use dynamics::events::{Event, StepReport};
-pub use dynamics::snapshot::{Stage, StepTrace};
 pub use dynamics::query::{QueryFilter, RayCastHit};
+#[cfg(feature = "serde")]
+pub use dynamics::snapshot::RestoreSeed;
+pub use dynamics::snapshot::{Stage, StepTrace};
 pub use dynamics::BodyHandle;
 pub use error::{Error, HullError, Input, Pool, SnapshotError};
 pub use math::{Aabb, Iso, Mat3, Quat, Vec3};

@@ -582,15 +582,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         let mut f = Fnv::new();
         f.put(body.get(..payload_len).unwrap_or(&[]));
         let mut hw = Writer { buf: head, pos: 0 };
-        hw.put(&MAGIC);
-        hw.u16(FORMAT_VERSION);
-        hw.u8(MATH_BACKEND);
-        hw.u8(0);
-        hw.u32(BODIES as u32);
-        hw.u32(CONTACTS as u32);
-        hw.u32(EVENTS as u32);
-        hw.u32(payload_len as u32);
-        hw.u64(f.0);
+        write_header::<BODIES, CONTACTS, EVENTS>(&mut hw, payload_len as u32, f.0);
         Ok(HEADER_LEN + payload_len)
     }
 
@@ -832,4 +824,125 @@ fn check_header<const B: usize, const C: usize, const E: usize>(buf: &[u8]) -> R
         return Err(SnapshotError::Checksum);
     }
     Ok(payload)
+}
+
+/// `serde` support for the same state as [`World::snapshot`]: a `World` serialises as the
+/// snapshot's bytes (a sequence of `u8`, streamed: nothing is allocated), and
+/// [`RestoreSeed`] deserialises such bytes into an existing world through
+/// [`World::restore_with_hulls`], with the same checks and errors.
+#[cfg(feature = "serde")]
+mod serde_support {
+    use super::{write_header, Fnv, Sink, HEADER_LEN};
+    use crate::shape::ConvexHull;
+    use crate::World;
+    use serde::de::{DeserializeSeed, Error as _, SeqAccess, Visitor};
+    use serde::ser::{SerializeSeq, Serializer};
+
+    /// Feeds bytes to a `SerializeSeq`, keeping the first error.
+    struct SeqSink<S: SerializeSeq> {
+        seq: S,
+        err: Option<S::Error>,
+    }
+
+    impl<S: SerializeSeq> Sink for SeqSink<S> {
+        fn put(&mut self, bytes: &[u8]) {
+            for b in bytes {
+                if self.err.is_none() {
+                    if let Err(e) = self.seq.serialize_element(b) {
+                        self.err = Some(e);
+                    }
+                }
+            }
+        }
+    }
+
+    impl<const B: usize, const C: usize, const E: usize> serde::Serialize for World<'_, B, C, E> {
+        fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+            let len = self.snapshot_len();
+            let mut hash = Fnv::new();
+            self.put_payload(&mut hash);
+            let seq = serializer.serialize_seq(Some(len))?;
+            let mut sink = SeqSink { seq, err: None };
+            write_header::<B, C, E>(&mut sink, (len - HEADER_LEN) as u32, hash.0);
+            self.put_payload(&mut sink);
+            match sink.err {
+                Some(e) => Err(e),
+                None => sink.seq.end(),
+            }
+        }
+    }
+
+    /// Deserialises snapshot bytes into `world`. Formats that hand out byte slices restore
+    /// straight from them; sequences are first gathered into `scratch` (size it with
+    /// [`World::max_snapshot_len`]).
+    pub struct RestoreSeed<'w, 'a, const B: usize, const C: usize, const E: usize> {
+        /// The world to restore into (unchanged on error).
+        pub world: &'w mut World<'a, B, C, E>,
+        /// Hulls to look hull shapes up in, besides those the world already uses.
+        pub hulls: &'a [ConvexHull],
+        /// Room for the bytes when the format yields them one by one.
+        pub scratch: &'w mut [u8],
+    }
+
+    impl<'de, const B: usize, const C: usize, const E: usize> DeserializeSeed<'de>
+        for RestoreSeed<'_, '_, B, C, E>
+    {
+        type Value = ();
+
+        fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+            d.deserialize_bytes(self)
+        }
+    }
+
+    impl<'de, const B: usize, const C: usize, const E: usize> Visitor<'de>
+        for RestoreSeed<'_, '_, B, C, E>
+    {
+        type Value = ();
+
+        fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+            f.write_str("carom snapshot bytes")
+        }
+
+        fn visit_bytes<Er: serde::de::Error>(self, v: &[u8]) -> Result<(), Er> {
+            self.world
+                .restore_with_hulls(v, self.hulls)
+                .map_err(Er::custom)
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+            let mut n = 0usize;
+            while let Some(b) = seq.next_element::<u8>()? {
+                let slot = self
+                    .scratch
+                    .get_mut(n)
+                    .ok_or_else(|| A::Error::custom("snapshot larger than the scratch buffer"))?;
+                *slot = b;
+                n += 1;
+            }
+            let bytes = self.scratch.get(..n).unwrap_or(&[]);
+            self.world
+                .restore_with_hulls(bytes, self.hulls)
+                .map_err(A::Error::custom)
+        }
+    }
+}
+
+#[cfg(feature = "serde")]
+pub use serde_support::RestoreSeed;
+
+/// Write the snapshot header for a payload of `len` bytes hashing to `hash`.
+fn write_header<const B: usize, const C: usize, const E: usize>(
+    s: &mut impl Sink,
+    len: u32,
+    hash: u64,
+) {
+    s.put(&MAGIC);
+    s.u16(FORMAT_VERSION);
+    s.u8(MATH_BACKEND);
+    s.u8(0);
+    s.u32(B as u32);
+    s.u32(C as u32);
+    s.u32(E as u32);
+    s.u32(len);
+    s.u64(hash);
 }
