@@ -15,10 +15,18 @@
 //! - Fixed arrays of [`MAX_EPA_VERTICES`] vertices and [`MAX_EPA_FACES`] faces, no heap.
 //! - The visible region is found by a flood fill from the closest face over faces sharing
 //!   an edge (so it is connected), and the horizon is the bounded list of its boundary
-//!   edges. The polytope is changed only after every new face proved valid and fit.
+//!   edges. A new face whose vertices are collinear (no usable normal) is refused; the
+//!   expansion is then redone with the faces the new point lies on (within the
+//!   tolerance) counted as visible, which removes the collinear vertex instead. The
+//!   polytope is changed only after every new face proved valid and fit.
 //! - The seed is GJK's final simplex, blown up to a tetrahedron with support points. When
 //!   `D` is flat through the origin (crossing segments, a point on a triangle) the core
 //!   depth is exactly 0 along the flat normal: that is returned at once.
+//! - A support point that is already a vertex but lies beyond the closest face by more
+//!   than the tolerance means the face's plane is off by rounding (a thin triangle). The
+//!   face is the answer only when the smallest upper bound seen (EPA's faces and SAT) is
+//!   within the tolerance of its distance; otherwise it is set aside and the next closest
+//!   face is expanded. (The textbook stops at once and reports that face.)
 //! - Every exit short of convergence ([`EpaStatus::PolytopeFull`],
 //!   [`EpaStatus::IterationLimit`], [`EpaStatus::Degenerate`]) answers with the smallest
 //!   *upper bound* `h_D(m) = max_{x∈D} m·x` seen, over EPA's faces and over the face
@@ -46,6 +54,13 @@ pub(crate) const MAX_EPA_ITERATIONS: u32 = 48;
 /// along the six axes). Rounding in a face plane built from points of size `scale` is a
 /// few ulps of it (about 1e-7 relative); 1e-5 leaves two orders of magnitude.
 pub(crate) const EPA_RELATIVE_TOLERANCE: f32 = 1.0e-5;
+
+/// A triangle whose doubled area `|(b − a) × (c − a)|` is at most this fraction of its
+/// longest edge squared (its height over that edge below 1e-5 of the edge) has no usable
+/// normal: for three collinear points the cross product is pure rounding, a few ulps of
+/// the edge lengths squared (about 1e-7 relative), and points in any direction. 1e-5
+/// leaves two orders of magnitude above that noise.
+const EPA_FLAT_FACE: f32 = 1.0e-5;
 
 /// Faces whose unit normals differ by less than this in `1 − cos` (about 0.5°) count
 /// as coplanar when the converged face's witnesses are looked up.
@@ -290,6 +305,10 @@ struct EpaFace {
     v: [u8; 3],
     normal: Vec3,
     distance: f32,
+    /// Set aside: its support point was already a vertex but its plane, tilted by
+    /// rounding, could not be certified (see [`stall_is_certified`]). No longer a
+    /// candidate for the closest face.
+    stalled: bool,
 }
 
 impl EpaFace {
@@ -335,22 +354,31 @@ impl Polytope {
             .any(|u| u.same_as(v))
     }
 
-    /// The face on vertices `i j k` (in that order), or `None` when it has no normal.
+    /// The face on vertices `i j k` (in that order), or `None` when it has no normal: its
+    /// vertices are collinear or coincident within [`EPA_FLAT_FACE`].
     fn make_face(&self, i: u8, j: u8, k: u8) -> Option<EpaFace> {
         let (a, b, c) = (self.vertex(i).w, self.vertex(j).w, self.vertex(k).w);
-        let (normal, _) = (b - a).cross(c - a).normalize_and_length()?;
-        Some(EpaFace {
+        let longest2 = scalar::max(
+            (b - a).length_squared(),
+            scalar::max((c - b).length_squared(), (a - c).length_squared()),
+        );
+        let (normal, area2) = (b - a).cross(c - a).normalize_and_length()?;
+        // False for a NaN too: such a face counts as flat.
+        let sound = area2 > EPA_FLAT_FACE * longest2;
+        sound.then_some(EpaFace {
             v: [i, j, k],
             normal,
             distance: normal.dot(a),
+            stalled: false,
         })
     }
 
-    /// Index of the face closest to the origin (lowest index on ties).
+    /// Index of the face closest to the origin (lowest index on ties), stalled faces
+    /// aside; `None` when every face has stalled.
     fn closest_face(&self) -> Option<usize> {
         let mut best: Option<(usize, f32)> = None;
         for (i, f) in self.used_faces().iter().enumerate() {
-            if best.is_none_or(|(_, d)| f.distance < d) {
+            if !f.stalled && best.is_none_or(|(_, d)| f.distance < d) {
                 best = Some((i, f.distance));
             }
         }
@@ -365,8 +393,17 @@ impl Polytope {
     }
 
     /// Add `w`, seen from outside face `start`: remove the connected region of faces that
-    /// `w` is in front of and fan new faces from its boundary (the horizon) to `w`.
-    fn expand(&mut self, start: usize, w: SimplexVertex) -> Result<(), Refused> {
+    /// `w` is in front of or within `coplanar` (m) of the plane of, and fan new faces from
+    /// its boundary (the horizon) to `w`.
+    ///
+    /// With `coplanar = 0` a `w` on the plane of a neighbour face (several vertices of `D`
+    /// on one face of `D`, common for boxes) keeps that face or not on the sign of
+    /// rounding noise. When it is kept, the new face on the shared edge is coplanar with
+    /// it and, if `w` and the edge are collinear (a vertex of the polytope on an edge of
+    /// `D`, as GJK's seed often is), has no normal: [`Refused::Degenerate`], and the
+    /// caller retries with `coplanar > 0` so the neighbour goes too. Removing a face that
+    /// `w` is behind by at most `coplanar` dents the polytope by at most that much.
+    fn expand(&mut self, start: usize, w: SimplexVertex, coplanar: f32) -> Result<(), Refused> {
         let new_index = self.vertex_count;
         if new_index >= MAX_EPA_VERTICES {
             return Err(Refused::Full);
@@ -398,7 +435,7 @@ impl Polytope {
                 let neighbour = self.face_with_edge(j, i);
                 let visible_neighbour = neighbour.and_then(|g| {
                     let nf = self.faces.get(g)?;
-                    let seen = nf.normal.dot(w.w - self.vertex(nf.v[0]).w) > 0.0;
+                    let seen = nf.normal.dot(w.w - self.vertex(nf.v[0]).w) > -coplanar;
                     seen.then_some(g)
                 });
                 match visible_neighbour {
@@ -642,6 +679,8 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
     let mut best: Option<(Vec3, f32)> = None;
     let mut status = EpaStatus::IterationLimit;
     let mut iterations = 0;
+    // SAT's upper bound, computed at the first stall.
+    let mut sat_upper: Option<f32> = None;
     while iterations < caps.iterations {
         iterations += 1;
         let Some(fi) = poly.closest_face() else {
@@ -654,14 +693,35 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
         if best.is_none_or(|(_, u)| upper < u) {
             best = Some((face.normal, upper));
         }
-        if upper - face.distance <= tol || poly.contains(&w) {
+        if upper - face.distance <= tol {
             return converged(&poly, &face, tol, iterations);
+        }
+        if poly.contains(&w) {
+            // Stalled: nothing new to add, yet `w` is beyond the face by more than the
+            // tolerance, so the face's plane is off by rounding (a sliver face). It is
+            // the answer only if the bracket certifies it; otherwise it is set aside
+            // and the next closest face is tried.
+            let sat = *sat_upper.get_or_insert_with(|| sat_axis(pa, pb).1);
+            if stall_is_certified(best, sat, face.distance, tol) {
+                return converged(&poly, &face, tol, iterations);
+            }
+            if let Some(f) = poly.faces.get_mut(fi) {
+                f.stalled = true;
+            }
+            continue;
         }
         if poly.vertex_count >= max_vertices {
             status = EpaStatus::PolytopeFull;
             break;
         }
-        match poly.expand(fi, w) {
+        // Faces `w` lies on are removed only when keeping them would build a flat face
+        // (a retry after an unchanged, refused polytope); other answers stay as they
+        // were bit for bit. Denting by `tol` stays within EPA's tolerance.
+        let grown = match poly.expand(fi, w, 0.0) {
+            Err(Refused::Degenerate) => poly.expand(fi, w, tol),
+            other => other,
+        };
+        match grown {
             Ok(()) => {}
             Err(Refused::Full) => {
                 status = EpaStatus::PolytopeFull;
@@ -674,6 +734,21 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
         }
     }
     bounded_answer(pa, pb, best, status, iterations)
+}
+
+/// Whether a stalled face can stand as the answer. The depth lies between the closest
+/// face's distance `lower` (a lower bound while the polytope is convex and inside `D`) and
+/// the smallest upper bound `h_D(m)` seen over EPA's faces (`best`) and the SAT axes
+/// (`sat_upper`): the face is certified when they agree within `tol`.
+///
+/// A face of `D` split into thin triangles tilts them by the rounding of their vertices
+/// over their height (1e-7 m over 0.5 mm is 2e-4 rad, 1e-4 m at a 1 m lever), so a thin
+/// triangle's distance can be off by more than `tol`; and a triangle that lost its meaning
+/// (three collinear points, a plane through the origin of a 1 m overlap) is off by the
+/// whole depth. Neither is certified; EPA sets it aside instead of calling it converged.
+fn stall_is_certified(best: Option<(Vec3, f32)>, sat_upper: f32, lower: f32, tol: f32) -> bool {
+    let upper = best.map_or(sat_upper, |(_, u)| scalar::min(u, sat_upper));
+    upper - lower <= tol
 }
 
 /// The answer from the converged face: depth `max(d, 0)`, normal `−m`, points from the
@@ -870,5 +945,95 @@ mod tests {
         let s = Shape::sphere(0.25).unwrap();
         let p = penetration_in_a(&t, &s, &Iso::from_position(Vec3::new(0.2, 0.0, 0.2))).unwrap();
         assert!((p.depth - 0.25).abs() < 1e-6 && scalar::abs(p.normal.y) > 1.0 - 1e-6);
+    }
+
+    /// The polytope vertex with `w` (index pair `(i, i)`).
+    fn vertex_at(w: Vec3, i: u32) -> SimplexVertex {
+        SimplexVertex {
+            w,
+            b: w,
+            index_a: i,
+            index_b: i,
+            ..SimplexVertex::default()
+        }
+    }
+
+    /// The index of the face on exactly these three vertices.
+    fn face_on(poly: &Polytope, v: [u8; 3]) -> usize {
+        let mut sorted = v;
+        sorted.sort_unstable();
+        poly.used_faces()
+            .iter()
+            .position(|f| {
+                let mut s = f.v;
+                s.sort_unstable();
+                s == sorted
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn a_point_on_a_neighbour_plane_and_an_edge_line_leaves_no_collinear_face() {
+        // The regression in miniature. Tetrahedron p0..p3: face G = (p0 p1 p2) lies in the
+        // plane z = −1 (outward −z), face T = (p0 p1 p3) holds the edge p0 p1 on y = 0.
+        // The new point w is 1e-6 m off the line of p0 p1, beyond p1: 1e-6 in front of T,
+        // 1e-6 behind G, far in front of S = (p1 p2 p3).
+        let p = [
+            Vec3::new(-2.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(-1.0, 2.0, -1.0),
+            Vec3::new(-1.0, 0.5, 1.0),
+        ];
+        let t = [0, 1, 2, 3].map(|i| vertex_at(p[i], i as u32));
+        let w = vertex_at(Vec3::new(1.0, -1.0e-6, -1.0 + 1.0e-6), 4);
+        let fresh = || tetrahedron(t).unwrap();
+        // Positively oriented already: `tetrahedron` keeps the order.
+        assert_eq!(fresh().vertex(1).w, p[1]);
+        let s = face_on(&fresh(), [1, 2, 3]);
+        // Deciding G on the sign alone keeps it; the fan then builds (p0 p1 w), three
+        // points within 1e-6 of a line (area ratio 3e-7): refused, polytope unchanged.
+        let mut strict = fresh();
+        assert_eq!(strict.expand(s, w, 0.0), Err(Refused::Degenerate));
+        assert_eq!((strict.vertex_count, strict.face_count), (4, 4));
+        // Counting faces within 1e-5 as seen removes G too: p1 drops out (it lies on the
+        // segment p0 w within 1e-6), and every vertex is behind every new face (convex,
+        // to the 1e-5 the test allowed).
+        let mut tolerant = fresh();
+        assert_eq!(tolerant.expand(s, w, 1.0e-5), Ok(()));
+        assert_eq!((tolerant.vertex_count, tolerant.face_count), (5, 4));
+        for f in tolerant.used_faces() {
+            assert!(!f.v.contains(&1), "{f:?}");
+            for v in tolerant.vertices.iter().take(5) {
+                assert!(f.normal.dot(v.w) - f.distance <= 1.0e-5, "{f:?} {v:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn make_face_refuses_collinear_and_coincident_points() {
+        let t = [
+            Vec3::new(-1.0, -1.0, 1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 1.0),
+        ]
+        .map(|w| w * 0.5);
+        let mut poly = tetrahedron([0, 1, 2, 3].map(|i| vertex_at(t[i], i as u32))).unwrap();
+        // `tetrahedron` may reorder the vertices: read them back.
+        let [v0, v1, v2] = [0, 1, 2].map(|i| poly.vertex(i).w);
+        // Vertex 4 1e-7 m off the midpoint of the edge 0–1 (noise level: the
+        // regression's face), vertex 5 1e-9 m from vertex 2.
+        let off_line = (v1 - v0).any_perpendicular().normalize_or(Vec3::X) * 1.0e-7;
+        let extra = [(v0 + v1) * 0.5 + off_line, v2 + Vec3::splat(1.0e-9)];
+        for (k, w) in extra.into_iter().enumerate() {
+            poly.vertices[4 + k] = vertex_at(w, 4 + k as u32);
+        }
+        poly.vertex_count = 6;
+        assert!(poly.make_face(0, 4, 1).is_none());
+        assert!(poly.make_face(2, 5, 3).is_none());
+        // A sound face: normal and distance exact to rounding (1e-6 at this 1 m scale).
+        let f = poly.make_face(0, 1, 2).unwrap();
+        let n = (v1 - v0).cross(v2 - v0).normalize_or(Vec3::Y);
+        assert!((f.normal - n).length() < 1.0e-6 && (f.distance - n.dot(v0)).abs() < 1.0e-6);
     }
 }
