@@ -70,7 +70,9 @@ impl Capsule {
     }
 
     pub(crate) fn aabb(&self, pose: &Iso) -> Aabb {
-        let axis = pose.transform_vector(Vec3::new(0.0, self.half_height, 0.0)).abs();
+        let axis = pose
+            .transform_vector(Vec3::new(0.0, self.half_height, 0.0))
+            .abs();
         Aabb::from_center_half(pose.position, axis + Vec3::splat(self.radius))
     }
 
@@ -108,14 +110,17 @@ impl Capsule {
             });
         }
         let mut best: Option<RayHit> = None;
-        // Cylinder side: (ox + t dx)² + (oz + t dz)² = r².
+        // Cylinder side, in the XZ plane: the ray's closest approach to the axis is at
+        // `s = −(o·d)/a` (a = |d|²), at distance |q|; it meets |x| = r at
+        // `t = s − √((r² − |q|²)/a)`. Taken from `q`, not from `b² − a c`, to avoid the
+        // cancellation of the textbook quadratic for thin capsules far away.
         let a = d.x * d.x + d.z * d.z;
         if a > 1.0e-12 {
-            let b = o.x * d.x + o.z * d.z;
-            let c = o.x * o.x + o.z * o.z - r * r;
-            let disc = b * b - a * c;
-            if disc >= 0.0 {
-                let t = (-b - scalar::sqrt(disc)) / a;
+            let s = -(o.x * d.x + o.z * d.z) / a;
+            let (qx, qz) = (o.x + s * d.x, o.z + s * d.z);
+            let h2 = r * r - (qx * qx + qz * qz);
+            if h2 >= 0.0 {
+                let t = s - scalar::sqrt(h2 / a);
                 if t >= 0.0 && t <= max_t {
                     let p = ray.at(t);
                     if scalar::abs(p.y) <= h {

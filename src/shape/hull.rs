@@ -1,8 +1,19 @@
 //! Convex hull: built on the stack from a point cloud, with a fixed bound on vertices and
 //! faces. Faces are convex polygons (coplanar triangles merged), each with its plane.
+//!
+//! [`ConvexHull::new`] runs in three stages, each in its own section below:
+//! 1. validation and the initial tetrahedron (the extreme points), which also classify a
+//!    degenerate cloud as coincident, collinear or coplanar;
+//! 2. quickhull (Barber, Dobkin and Huhdanpaa 1996, "The Quickhull Algorithm for Convex
+//!    Hulls") on a triangle mesh held in fixed working arrays;
+//! 3. faces: triangles within tolerance of a common plane merge into one convex polygon,
+//!    and vertices left inside a polygon or on a straight edge are dropped.
+//!
+//! Mass properties sum tetrahedra (Tonon 2004; the covariance form of Blow and Binstock
+//! 2004); ray casts clip the ray against every face plane (Cyrus and Beck 1978).
 
-use super::{Face, FeatureId, MassProperties, Ray, RayHit};
-use crate::error::{Error, HullError};
+use super::{Face, FeatureId, MassProperties, Ray, RayHit, MAX_FACE_VERTICES};
+use crate::error::{Error, HullError, Input};
 use crate::math::{scalar, Aabb, Iso, Mat3, Vec3};
 
 /// Most vertices a hull keeps.
@@ -15,7 +26,7 @@ pub const MAX_HULL_FACE_INDICES: usize = 2 * (3 * MAX_HULL_VERTICES - 6);
 pub const MAX_HULL_INPUT_POINTS: usize = 1024;
 
 /// A convex polytope. Build it with [`ConvexHull::new`]; it is plain data, `Copy`, and about
-/// 4 KiB.
+/// 3.5 KiB.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConvexHull {
     /// Vertices (local frame, m); the first `vertex_count` are used.
@@ -32,43 +43,116 @@ pub struct ConvexHull {
     pub(crate) face_indices: [u8; MAX_HULL_FACE_INDICES],
     /// Centroid of the volume (local frame).
     pub(crate) centroid: Vec3,
+    /// The distance tolerance the hull was built with (m).
+    pub(crate) tolerance: f32,
+    /// True when the cloud needed more than [`MAX_HULL_VERTICES`] vertices and the hull
+    /// keeps the greedy subset described at [`ConvexHull::new`].
+    pub(crate) reduced: bool,
 }
 
+/// A hull with nothing in it, filled by the builder.
+const EMPTY_HULL: ConvexHull = ConvexHull {
+    vertices: [Vec3::ZERO; MAX_HULL_VERTICES],
+    vertex_count: 0,
+    normals: [Vec3::ZERO; MAX_HULL_FACES],
+    offsets: [0.0; MAX_HULL_FACES],
+    face_start: [0; MAX_HULL_FACES],
+    face_len: [0; MAX_HULL_FACES],
+    face_count: 0,
+    face_indices: [0; MAX_HULL_FACE_INDICES],
+    centroid: Vec3::ZERO,
+    tolerance: 0.0,
+    reduced: false,
+};
+
 impl ConvexHull {
-    /// Build the convex hull of `points` (local frame, m).
+    /// Relative distance tolerance: the build tolerance is this times the largest
+    /// `|coordinate|` of the input (at least [`ConvexHull::MIN_TOLERANCE`]). It is measured
+    /// from the origin, not the cloud's centre, because `f32` resolves coordinates far from
+    /// the origin more coarsely: about 170 ulp of the largest coordinate.
+    pub const TOLERANCE: f32 = 1.0e-5;
+    /// Smallest build tolerance (m): keeps squared areas of the smallest accepted
+    /// triangles (`tolerance⁴`) far above `f32`'s smallest normal number.
+    pub const MIN_TOLERANCE: f32 = 1.0e-8;
+    /// Largest `|coordinate|` accepted (m): the inertia of a hull this size (`~ L⁵`) stays
+    /// finite in `f32` for densities up to 10⁶ kg/m³.
+    pub const MAX_COORDINATE: f32 = 1.0e6;
+
+    /// Build the convex hull of `points` (local frame, m), on the stack (about 26 KiB of
+    /// working memory: 16 KiB of quickhull state, 5 KiB of polygons, the result), without
+    /// allocating. The geometric tests run in f64 (only IEEE `+ − × ÷`, so the same bits on
+    /// every target; soft-float on an MCU without a double-precision FPU).
     ///
-    /// Errors: a non-finite coordinate; fewer than 4 points, or points that are all the
-    /// same, collinear or coplanar (duplicates do not count); more than
-    /// [`MAX_HULL_INPUT_POINTS`] points; a hull that needs more than
-    /// [`MAX_HULL_VERTICES`] vertices.
+    /// The build tolerance is `eps = max(TOLERANCE · max |coordinate|, MIN_TOLERANCE)`
+    /// (see [`ConvexHull::TOLERANCE`]): a point less than `eps` outside the hull built so far
+    /// is treated as on it, and triangles whose corners lie within `eps` of a common plane
+    /// are merged into one face. Every input point ends up inside or within a few `eps` of
+    /// every face plane (unless the hull is reduced, below).
+    ///
+    /// The result:
+    /// - vertices are input points (bit for bit), in input order; interior points, points
+    ///   inside a face and points on a straight edge are dropped; of duplicate points the
+    ///   first is kept;
+    /// - faces are convex polygons counter-clockwise about their outward normal, each
+    ///   starting at its lowest-index vertex. Coplanar triangles are merged; a merged face
+    ///   of more than [`MAX_FACE_VERTICES`] corners is split into a fan of pieces from its
+    ///   first corner, each of at most [`MAX_FACE_VERTICES`] corners (corners `0, 1..=15`,
+    ///   then `0, 15..=29`, ...);
+    /// - the same input (same points in the same order) gives the same hull, bit for bit.
+    ///
+    /// **Reduction.** When the cloud needs more than [`MAX_HULL_VERTICES`] vertices, the
+    /// hull keeps the first [`MAX_HULL_VERTICES`] that quickhull picks: the initial
+    /// tetrahedron (the two axis-extreme points farthest apart, the point farthest from
+    /// their line, the point farthest from that plane), then again and again the input
+    /// point farthest outside the hull so far (lowest index on ties). The result is the
+    /// hull of those points: a polytope inside the true hull that approximates it
+    /// greedily; [`ConvexHull::is_reduced`] reports it.
+    ///
+    /// Errors, checked in this order:
+    /// - more than [`MAX_HULL_INPUT_POINTS`] points: `Hull(TooManyPoints)`;
+    /// - a non-finite coordinate: `NonFinite(Input::Point)`;
+    /// - a coordinate beyond `±MAX_COORDINATE`: `OutOfRange(Input::Point)`;
+    /// - fewer than 4 points: `Hull(TooFewPoints)`;
+    /// - all points within `eps` of one point, one line or one plane (duplicates do not
+    ///   count as distinct): `Hull(Coincident)`, `Hull(Collinear)`, `Hull(Coplanar)`;
+    /// - a numerically broken intermediate mesh (not seen in testing, but the builder
+    ///   checks for it rather than trusting it): `Hull(TooComplex)`.
     pub fn new(points: &[Vec3]) -> Result<ConvexHull, Error> {
-        let _ = points;
-        Err(Error::Hull(HullError::TooComplex))
+        let eps = validate(points)? as f64;
+        let simplex = initial_simplex(points, eps)?;
+        let mut builder = Builder::new(points, eps, simplex)?;
+        builder.run()?;
+        builder.finish()
     }
 
     /// The vertices.
     pub fn vertices(&self) -> &[Vec3] {
-        &self.vertices[..self.vertex_count as usize]
+        let n = (self.vertex_count as usize).min(MAX_HULL_VERTICES);
+        &self.vertices[..n]
     }
 
     /// Number of faces.
     pub fn face_count(&self) -> usize {
-        self.face_count as usize
+        (self.face_count as usize).min(MAX_HULL_FACES)
     }
 
     /// Face `f`'s outward unit normal and plane offset (`n · p = d` on the face).
     /// Out-of-range indices give face 0.
     pub fn plane(&self, f: usize) -> (Vec3, f32) {
-        let f = if f < self.face_count as usize { f } else { 0 };
-        (self.normals[f], self.offsets[f])
+        let f = if f < self.face_count() { f } else { 0 };
+        (
+            self.normals.get(f).copied().unwrap_or(Vec3::Y),
+            self.offsets.get(f).copied().unwrap_or(0.0),
+        )
     }
 
     /// Face `f`'s vertex indices, counter-clockwise about its normal.
+    /// Out-of-range indices give face 0.
     pub fn face_vertices(&self, f: usize) -> &[u8] {
-        let f = if f < self.face_count as usize { f } else { 0 };
-        let s = self.face_start[f] as usize;
-        let e = (s + self.face_len[f] as usize).min(MAX_HULL_FACE_INDICES);
-        &self.face_indices[s..e]
+        let f = if f < self.face_count() { f } else { 0 };
+        let s = self.face_start.get(f).copied().unwrap_or(0) as usize;
+        let len = self.face_len.get(f).copied().unwrap_or(0) as usize;
+        self.face_indices.get(s..s + len).unwrap_or(&[])
     }
 
     /// Centroid of the hull's volume (local frame).
@@ -76,47 +160,70 @@ impl ConvexHull {
         self.centroid
     }
 
+    /// The distance tolerance the hull was built with (m); see [`ConvexHull::new`].
+    pub fn tolerance(&self) -> f32 {
+        self.tolerance
+    }
+
+    /// True when the cloud needed more than [`MAX_HULL_VERTICES`] vertices and the hull
+    /// keeps the greedy subset described at [`ConvexHull::new`]; input points may then lie
+    /// outside it.
+    pub fn is_reduced(&self) -> bool {
+        self.reduced
+    }
+
+    /// The face planes in use, `(normal, offset)`, in face order.
+    fn planes(&self) -> impl Iterator<Item = (Vec3, f32)> + '_ {
+        self.normals
+            .iter()
+            .copied()
+            .zip(self.offsets.iter().copied())
+            .take(self.face_count())
+    }
+
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
-        let vs = self.vertices();
         let mut best = 0usize;
         let mut best_d = f32::NEG_INFINITY;
-        for (i, v) in vs.iter().enumerate() {
+        for (i, v) in self.vertices().iter().enumerate() {
             let d = v.dot(dir);
             if d > best_d {
                 best_d = d;
                 best = i;
             }
         }
-        (self.vertices[best], best as u32)
+        (self.core_vertex(best as u32), best as u32)
     }
 
     pub(crate) fn core_vertex(&self, index: u32) -> Vec3 {
-        let i = index as usize;
-        if i < self.vertex_count as usize {
-            self.vertices[i]
-        } else {
-            self.vertices[0]
-        }
+        let vs = self.vertices();
+        vs.get(index as usize)
+            .or(vs.first())
+            .copied()
+            .unwrap_or(Vec3::ZERO)
     }
 
     /// The face whose normal is most aligned with `dir` (lowest index on ties).
     pub(crate) fn supporting_face(&self, dir: Vec3) -> Face {
         let mut best = 0usize;
         let mut best_d = f32::NEG_INFINITY;
-        for f in 0..self.face_count as usize {
-            let d = self.normals[f].dot(dir);
+        for (f, (n, _)) in self.planes().enumerate() {
+            let d = n.dot(dir);
             if d > best_d {
                 best_d = d;
                 best = f;
             }
         }
-        let mut face = Face::new(self.normals[best], FeatureId::face(best as u32));
+        let (normal, _) = self.plane(best);
+        let mut face = Face::new(normal, FeatureId::face(best as u32));
         let idx = self.face_vertices(best);
-        let n = idx.len();
-        for k in 0..n {
-            let i = idx[k] as u32;
-            let j = idx[(k + 1) % n] as u32;
-            face.push(self.core_vertex(i), FeatureId::vertex(i), FeatureId::edge(i, j));
+        let next = idx.iter().skip(1).chain(idx.first());
+        for (&i, &j) in idx.iter().zip(next) {
+            let (i, j) = (i as u32, j as u32);
+            face.push(
+                self.core_vertex(i),
+                FeatureId::vertex(i),
+                FeatureId::edge(i, j),
+            );
         }
         face
     }
@@ -144,10 +251,10 @@ impl ConvexHull {
     /// that face's plane.
     pub(crate) fn min_extent(&self) -> f32 {
         let mut w = f32::INFINITY;
-        for f in 0..self.face_count as usize {
+        for (n, d) in self.planes() {
             let mut deepest = 0.0;
             for v in self.vertices() {
-                deepest = scalar::max(deepest, self.offsets[f] - self.normals[f].dot(*v));
+                deepest = scalar::max(deepest, d - n.dot(*v));
             }
             w = scalar::min(w, deepest);
         }
@@ -158,19 +265,1351 @@ impl ConvexHull {
         }
     }
 
-    /// Mass properties for a uniform density.
+    /// Mass properties for a uniform density (kg/m³): the volume, centroid and second
+    /// moments summed over tetrahedra, then `I = tr(C) 𝟙 − C` for the covariance `C` about
+    /// the centroid (Blow and Binstock 2004). The density is not checked here; use
+    /// [`super::Shape::mass_properties`] for a checked call.
     pub fn mass_properties(&self, density: f32) -> MassProperties {
-        let _ = density;
-        MassProperties {
-            mass: 0.0,
-            center: self.centroid,
-            inertia: Mat3::ZERO,
+        match self.volume_integrals() {
+            Some((volume, center, cov)) => {
+                let trace = cov.x.x + cov.y.y + cov.z.z;
+                let inertia = Mat3::from_diagonal(Vec3::splat(trace)) + cov.scale(-1.0);
+                MassProperties {
+                    mass: density * volume,
+                    center,
+                    inertia: inertia.scale(density),
+                }
+            }
+            None => MassProperties {
+                mass: 0.0,
+                center: self.centroid,
+                inertia: Mat3::ZERO,
+            },
         }
     }
 
-    /// Ray cast in the local frame.
+    /// Volume (m³), centroid (local frame, m) and covariance `C = ∫ (x − c)(x − c)ᵀ dV`
+    /// about the centroid (m⁵), or `None` for an empty or flat hull. Summed in f64: a
+    /// needle-thin hull's volume is a small difference of large products.
+    ///
+    /// Each face is fanned into triangles `(a, b, c)` from its first corner; each triangle
+    /// and the reference point `r` (the vertex mean, inside the hull, which keeps the
+    /// coordinates small whatever the hull's offset) span a tetrahedron with
+    /// `6 V = a · (b × c)` (coordinates relative to `r`, positive for outward
+    /// counter-clockwise faces). For a tetrahedron with one corner at the origin
+    /// (Tonon 2004): `∫ x dV = V (a + b + c) / 4` and
+    /// `∫ x xᵀ dV = V / 20 · (a aᵀ + b bᵀ + c cᵀ + s sᵀ)` with `s = a + b + c`.
+    /// The parallel-axis step `C = ∫ x xᵀ dV − V c cᵀ` moves the moments to the centroid.
+    /// Faces and fan triangles are summed in index order.
+    fn volume_integrals(&self) -> Option<(f32, Vec3, Mat3)> {
+        let vs = self.vertices();
+        if vs.is_empty() {
+            return None;
+        }
+        let mut r = D3::ZERO;
+        for v in vs {
+            r = r.add(D3::from(*v));
+        }
+        r = r.scale(1.0 / vs.len() as f64);
+        let mut six_volume = 0.0f64; // Σ det
+        let mut moment = D3::ZERO; // Σ det · s
+        let mut second = Sym64::default(); // Σ det · (a aᵀ + b bᵀ + c cᵀ + s sᵀ)
+        for f in 0..self.face_count() {
+            let idx = self.face_vertices(f);
+            let Some((&first, rest)) = idx.split_first() else {
+                continue;
+            };
+            let at = |i: u8| D3::from(self.core_vertex(i as u32)).sub(r);
+            let a = at(first);
+            for pair in rest.windows(2) {
+                let (Some(&i), Some(&j)) = (pair.first(), pair.get(1)) else {
+                    continue;
+                };
+                let (b, c) = (at(i), at(j));
+                let det = a.dot(b.cross(c));
+                let s = a.add(b).add(c);
+                six_volume += det;
+                moment = moment.add(s.scale(det));
+                second.add_outer(a, det);
+                second.add_outer(b, det);
+                second.add_outer(c, det);
+                second.add_outer(s, det);
+            }
+        }
+        let volume = six_volume / 6.0;
+        if !(volume > 0.0 && volume.is_finite()) {
+            return None;
+        }
+        // ∫ x dV = Σ det s / 24, divided by V = Σ det / 6.
+        let c = moment.scale(1.0 / (4.0 * six_volume));
+        // ∫ x xᵀ dV = Σ det (...) / 120, then C = ∫ x xᵀ dV − V c cᵀ.
+        let mut cov = second.scaled(1.0 / 120.0);
+        cov.add_outer(c, -volume);
+        Some((volume as f32, r.add(c).to_f32(), cov.to_mat3()))
+    }
+
+    /// Ray cast in the local frame by clipping the ray against every face plane
+    /// (Cyrus and Beck 1978): each plane with `n · d < 0` raises the entry distance, each
+    /// with `n · d > 0` lowers the exit distance, a plane parallel to the ray with the
+    /// origin outside it is a miss. An origin inside (or on) the hull gives `t = 0` with
+    /// normal `−direction`, like the other shapes.
     pub fn cast_ray(&self, ray: &Ray, max_t: f32) -> Option<RayHit> {
-        let _ = (ray, max_t);
+        let mut t_enter = 0.0f32;
+        let mut t_exit = max_t;
+        let mut entry_normal: Option<Vec3> = None;
+        for (n, d) in self.planes() {
+            // Signed distance of the origin below the plane (≥ 0: inside this plane) and
+            // the ray's speed along the normal; the plane is hit at `t = depth / speed`.
+            let depth = d - n.dot(ray.origin);
+            let speed = n.dot(ray.direction);
+            if speed < 0.0 {
+                let t = depth / speed;
+                if t > t_enter {
+                    t_enter = t;
+                    entry_normal = Some(n);
+                }
+            } else if speed > 0.0 {
+                t_exit = scalar::min(t_exit, depth / speed);
+            } else if depth < 0.0 {
+                return None;
+            }
+            if t_enter > t_exit {
+                return None;
+            }
+        }
+        Some(RayHit {
+            t: t_enter,
+            point: ray.at(t_enter),
+            normal: entry_normal.unwrap_or(-ray.direction),
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Building works in f64. The inputs are f32 and the tolerance is f32-sized (1e-5 of the
+// largest coordinate), but the orientation tests must resolve much finer than that: a
+// triangle only `eps` tall computed in f32 has a normal off by ~0.06 rad, enough to flip
+// which side a distant point is on. f64 `+ − × ÷` are IEEE-exact and the same on every
+// target (soft-float on an MCU: slower, but a hull is built once).
+// ---------------------------------------------------------------------------------------
+
+/// A point or direction in f64 for the builder's predicates.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct D3 {
+    x: f64,
+    y: f64,
+    z: f64,
+}
+
+impl D3 {
+    const ZERO: D3 = D3 {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+    };
+
+    fn from(v: Vec3) -> D3 {
+        D3 {
+            x: v.x as f64,
+            y: v.y as f64,
+            z: v.z as f64,
+        }
+    }
+
+    fn sub(self, o: D3) -> D3 {
+        D3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    fn add(self, o: D3) -> D3 {
+        D3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    fn scale(self, s: f64) -> D3 {
+        D3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+
+    fn dot(self, o: D3) -> f64 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    fn cross(self, o: D3) -> D3 {
+        D3 {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+
+    fn length_squared(self) -> f64 {
+        self.dot(self)
+    }
+
+    /// `self / |self|`, or `None` when zero, not finite, or outside the range where the
+    /// f32 seed of [`sqrt64`] is valid (never for accepted inputs: `|v|²` lies between
+    /// `MIN_TOLERANCE⁴ = 10⁻³²` and `(2 · MAX_COORDINATE)⁴ ≈ 10²⁵`).
+    fn unit(self) -> Option<D3> {
+        let l = sqrt64(self.length_squared())?;
+        Some(self.scale(1.0 / l))
+    }
+
+    fn to_f32(self) -> Vec3 {
+        Vec3::new(self.x as f32, self.y as f32, self.z as f32)
+    }
+}
+
+/// A symmetric 3×3 matrix in f64 (xx, yy, zz, xy, yz, zx), for second moments.
+#[derive(Clone, Copy, Debug, Default)]
+struct Sym64 {
+    xx: f64,
+    yy: f64,
+    zz: f64,
+    xy: f64,
+    yz: f64,
+    zx: f64,
+}
+
+impl Sym64 {
+    /// `self += w · v vᵀ`.
+    fn add_outer(&mut self, v: D3, w: f64) {
+        self.xx += w * v.x * v.x;
+        self.yy += w * v.y * v.y;
+        self.zz += w * v.z * v.z;
+        self.xy += w * v.x * v.y;
+        self.yz += w * v.y * v.z;
+        self.zx += w * v.z * v.x;
+    }
+
+    fn scaled(self, s: f64) -> Sym64 {
+        Sym64 {
+            xx: self.xx * s,
+            yy: self.yy * s,
+            zz: self.zz * s,
+            xy: self.xy * s,
+            yz: self.yz * s,
+            zx: self.zx * s,
+        }
+    }
+
+    fn to_mat3(self) -> Mat3 {
+        let (xx, yy, zz) = (self.xx as f32, self.yy as f32, self.zz as f32);
+        let (xy, yz, zx) = (self.xy as f32, self.yz as f32, self.zx as f32);
+        Mat3::from_cols(
+            Vec3::new(xx, xy, zx),
+            Vec3::new(xy, yy, yz),
+            Vec3::new(zx, yz, zz),
+        )
+    }
+}
+
+/// `√x` in f64 from only `+ − × ÷`: the f32 square root (correctly rounded, via
+/// [`scalar::sqrt`]) as the seed, then three Newton steps `s ← (s + x/s) / 2`, each
+/// doubling the correct digits (7 → 14 → 28). `None` when `x` is not positive, not
+/// finite, or outside f32's normal range.
+fn sqrt64(x: f64) -> Option<f64> {
+    let x32 = x as f32;
+    if !(x32.is_normal() && x32 > 0.0 && x.is_finite()) {
+        return None;
+    }
+    let mut s = scalar::sqrt(x32) as f64;
+    for _ in 0..3 {
+        s = 0.5 * (s + x / s);
+    }
+    Some(s)
+}
+
+/// Input point `i` in f64, or the origin for an index out of range.
+fn point_at(points: &[Vec3], i: usize) -> D3 {
+    points.get(i).copied().map_or(D3::ZERO, D3::from)
+}
+
+// ---------------------------------------------------------------------------------------
+// Stage 1: validation and the initial tetrahedron.
+// ---------------------------------------------------------------------------------------
+
+/// Check the cloud (in the order documented at [`ConvexHull::new`]) and return the build
+/// tolerance `eps` (m).
+fn validate(points: &[Vec3]) -> Result<f32, Error> {
+    if points.len() > MAX_HULL_INPUT_POINTS {
+        return Err(Error::Hull(HullError::TooManyPoints));
+    }
+    let mut largest = 0.0f32;
+    for p in points {
+        if !p.is_finite() {
+            return Err(Error::NonFinite(Input::Point));
+        }
+        largest = scalar::max(largest, p.abs().max_elem());
+    }
+    if largest > ConvexHull::MAX_COORDINATE {
+        return Err(Error::OutOfRange(Input::Point));
+    }
+    if points.len() < 4 {
+        return Err(Error::Hull(HullError::TooFewPoints));
+    }
+    Ok(scalar::max(
+        ConvexHull::TOLERANCE * largest,
+        ConvexHull::MIN_TOLERANCE,
+    ))
+}
+
+/// Indices `[a, b, c, d]` of a tetrahedron with `d` below the plane of `(a, b, c)` (so
+/// `(a, b, c)` is counter-clockwise seen from outside): `a, b` the two of the six
+/// axis-extreme points farthest apart, `c` the point farthest from their line, `d` the
+/// point farthest from the plane `(a, b, c)`. Lowest index on ties. Each distance must
+/// exceed `eps`, else the cloud is coincident, collinear or coplanar.
+fn initial_simplex(points: &[Vec3], eps: f64) -> Result<[u16; 4], Error> {
+    let at = |i: usize| point_at(points, i);
+    let mut lo = [0usize; 3];
+    let mut hi = [0usize; 3];
+    for (i, p) in points.iter().enumerate() {
+        let lo_p = lo.map(|j| points.get(j).copied().unwrap_or(*p));
+        let hi_p = hi.map(|j| points.get(j).copied().unwrap_or(*p));
+        for k in 0..3 {
+            if p[k] < lo_p[k][k] {
+                lo[k] = i;
+            }
+            if p[k] > hi_p[k][k] {
+                hi[k] = i;
+            }
+        }
+    }
+    let extremes = [lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]];
+    let (mut a, mut b, mut best) = (0usize, 0usize, -1.0f64);
+    for (k, &i) in extremes.iter().enumerate() {
+        for &j in extremes.iter().skip(k + 1) {
+            let d2 = at(j).sub(at(i)).length_squared();
+            if d2 > best {
+                (a, b, best) = (i, j, d2);
+            }
+        }
+    }
+    // Inputs are finite, so no distance below is NaN.
+    if best <= eps * eps {
+        return Err(Error::Hull(HullError::Coincident));
+    }
+    let (pa, pb) = (at(a), at(b));
+    let axis = pb
+        .sub(pa)
+        .unit()
+        .ok_or(Error::Hull(HullError::Coincident))?;
+    let (mut c, mut best) = (0usize, -1.0f64);
+    for i in 0..points.len() {
+        let d2 = at(i).sub(pa).cross(axis).length_squared();
+        if d2 > best {
+            (c, best) = (i, d2);
+        }
+    }
+    if best <= eps * eps {
+        return Err(Error::Hull(HullError::Collinear));
+    }
+    let pc = at(c);
+    let normal = pb
+        .sub(pa)
+        .cross(pc.sub(pa))
+        .unit()
+        .ok_or(Error::Hull(HullError::Collinear))?;
+    let (mut d, mut best, mut side) = (0usize, -1.0f64, 0.0f64);
+    for i in 0..points.len() {
+        let h = normal.dot(at(i).sub(pa));
+        let dist = if h < 0.0 { -h } else { h };
+        if dist > best {
+            (d, best, side) = (i, dist, h);
+        }
+    }
+    if best <= eps {
+        return Err(Error::Hull(HullError::Coplanar));
+    }
+    if side > 0.0 {
+        core::mem::swap(&mut b, &mut c);
+    }
+    Ok([a as u16, b as u16, c as u16, d as u16])
+}
+
+// ---------------------------------------------------------------------------------------
+// Stage 2: quickhull on a triangle mesh in fixed working arrays.
+// ---------------------------------------------------------------------------------------
+
+/// Working triangles. A closed triangulated hull of `V` vertices has `2V − 4` triangles;
+/// the builder never lets `V` pass [`MAX_HULL_VERTICES`] and retires the visible triangles
+/// before it adds the cone, so `2 · MAX_HULL_VERTICES` slots always suffice (running out
+/// would be a broken mesh: `TooComplex`).
+const MAX_WORK_TRIS: usize = 2 * MAX_HULL_VERTICES;
+/// Horizon edges: a simple horizon loop visits each hull vertex at most once.
+const MAX_HORIZON: usize = MAX_HULL_VERTICES;
+/// Points added before giving up as `TooComplex`: each insertion makes a point a vertex,
+/// and only a point buried by a later insertion can be added twice.
+const MAX_INSERTIONS: usize = 2 * MAX_HULL_INPUT_POINTS;
+/// Full re-tests of the non-vertex points against the finished mesh (see `Builder::run`);
+/// the first almost always finds nothing.
+const MAX_RESCANS: usize = 8;
+/// A cone triangle with a hull vertex more than this fraction of `eps` above it is a fold
+/// (see [`Builder::settle_horizon`]).
+const FOLD_FRACTION: f64 = 0.1;
+/// "No triangle": an input point that is inside (or a vertex), or a missing neighbour.
+const NONE: u8 = u8::MAX;
+/// An input point whose triangle was just retired, waiting for the new cone.
+const PENDING: u8 = u8::MAX - 1;
+
+/// A working triangle: corners (input indices) counter-clockwise about the outward normal,
+/// the neighbour across each edge `v[k] → v[k + 1]`, and its plane `n · p = d` (f64).
+#[derive(Clone, Copy)]
+struct Tri {
+    v: [u16; 3],
+    adj: [u8; 3],
+    n: D3,
+    d: f64,
+    alive: bool,
+    visible: bool,
+}
+
+const DEAD_TRI: Tri = Tri {
+    v: [0; 3],
+    adj: [NONE; 3],
+    n: D3::ZERO,
+    d: 0.0,
+    alive: false,
+    visible: false,
+};
+
+impl Tri {
+    /// Signed height of `p` above the plane (m).
+    #[inline]
+    fn height(&self, p: D3) -> f64 {
+        self.n.dot(p) - self.d
+    }
+
+    /// The corner after corner `k`.
+    #[inline]
+    fn next(&self, k: usize) -> u16 {
+        match k {
+            0 => self.v[1],
+            1 => self.v[2],
+            _ => self.v[0],
+        }
+    }
+
+    /// Which edge `k` runs `from → to`, if any.
+    fn edge_index(&self, from: u16, to: u16) -> Option<usize> {
+        (0..3).find(|&k| self.v[k] == from && self.next(k) == to)
+    }
+}
+
+/// What [`Builder::absorb_folds`] found.
+enum Folds {
+    /// Some triangles beyond folds were made visible: look again.
+    Absorbed,
+    /// No fold leaves a vertex more than `eps` outside: build the cone.
+    Mild,
+    /// A fold that absorbing cannot mend leaves a vertex more than `eps` outside.
+    Stuck,
+}
+
+/// A directed edge `a → b` of the region being replaced, and the triangle on its far side.
+#[derive(Clone, Copy, Default)]
+struct Edge {
+    a: u16,
+    b: u16,
+    outer: u8,
+}
+
+/// The quickhull state. Each input point is either a hull vertex, inside, or *outside*:
+/// owned by the triangle it lies farthest above (by more than `eps`), with that height.
+struct Builder<'p> {
+    points: &'p [Vec3],
+    eps: f64,
+    tris: [Tri; MAX_WORK_TRIS],
+    /// Owning triangle of each point, or [`NONE`] / [`PENDING`].
+    owner: [u8; MAX_HULL_INPUT_POINTS],
+    /// Height of each outside point above its owner (m).
+    height: [f64; MAX_HULL_INPUT_POINTS],
+    /// Number of live triangles using each point as a corner.
+    degree: [u8; MAX_HULL_INPUT_POINTS],
+    /// Points with a non-zero degree: the current hull's vertices.
+    vertex_count: usize,
+    reduced: bool,
+}
+
+impl<'p> Builder<'p> {
+    /// The tetrahedron `[a, b, c, d]` (from [`initial_simplex`]) as four triangles, and
+    /// every other point given to the face it is farthest above.
+    fn new(points: &'p [Vec3], eps: f64, simplex: [u16; 4]) -> Result<Builder<'p>, Error> {
+        let mut b = Builder {
+            points,
+            eps,
+            tris: [DEAD_TRI; MAX_WORK_TRIS],
+            owner: [NONE; MAX_HULL_INPUT_POINTS],
+            height: [0.0; MAX_HULL_INPUT_POINTS],
+            degree: [0; MAX_HULL_INPUT_POINTS],
+            vertex_count: 0,
+            reduced: false,
+        };
+        let [a, bb, c, d] = simplex;
+        let faces = [[a, bb, c], [a, d, bb], [bb, d, c], [c, d, a]];
+        for (slot, v) in faces.iter().enumerate() {
+            b.add_tri(slot, *v)?;
+        }
+        // Link each edge to the face holding its reverse.
+        for s in 0..faces.len() {
+            for k in 0..3 {
+                let (from, to) = (b.tris[s].v[k], b.tris[s].next(k));
+                let other = (0..faces.len()).find(|&o| b.tris[o].edge_index(to, from).is_some());
+                b.tris[s].adj[k] = other.map_or(NONE, |o| o as u8);
+            }
+        }
+        let new_faces = [0u8, 1, 2, 3];
+        for i in 0..points.len().min(MAX_HULL_INPUT_POINTS) {
+            if simplex.contains(&(i as u16)) {
+                continue;
+            }
+            b.assign(i, &new_faces);
+        }
+        Ok(b)
+    }
+
+    fn point(&self, i: u16) -> D3 {
+        point_at(self.points, i as usize)
+    }
+
+    fn tri(&self, t: u8) -> Option<&Tri> {
+        self.tris.get(t as usize).filter(|t| t.alive)
+    }
+
+    /// Give point `i` to the triangle among `candidates` it is farthest above, if it is
+    /// more than `eps` above it (first candidate on ties); else mark it inside.
+    fn assign(&mut self, i: usize, candidates: &[u8]) {
+        let p = point_at(self.points, i);
+        let mut best = (NONE, self.eps);
+        for &t in candidates {
+            if let Some(tri) = self.tri(t) {
+                let h = tri.height(p);
+                if h > best.1 {
+                    best = (t, h);
+                }
+            }
+        }
+        if let (Some(o), Some(h)) = (self.owner.get_mut(i), self.height.get_mut(i)) {
+            *o = best.0;
+            *h = best.1;
+        }
+    }
+
+    /// Put triangle `v` (counter-clockwise seen from outside) in `slot` with its plane.
+    /// Fails on a zero-area triangle, which a consistent mesh never makes.
+    fn add_tri(&mut self, slot: usize, v: [u16; 3]) -> Result<(), Error> {
+        let [pa, pb, pc] = v.map(|i| self.point(i));
+        let n = pb
+            .sub(pa)
+            .cross(pc.sub(pa))
+            .unit()
+            .ok_or(Error::Hull(HullError::TooComplex))?;
+        // Offset averaged over the corners, summed in corner order.
+        let d = (n.dot(pa) + n.dot(pb) + n.dot(pc)) * (1.0 / 3.0);
+        let tri = self
+            .tris
+            .get_mut(slot)
+            .ok_or(Error::Hull(HullError::TooComplex))?;
+        *tri = Tri {
+            v,
+            adj: [NONE; 3],
+            n,
+            d,
+            alive: true,
+            visible: false,
+        };
+        for i in v {
+            if let Some(deg) = self.degree.get_mut(i as usize) {
+                if *deg == 0 {
+                    self.vertex_count += 1;
+                }
+                *deg = deg.saturating_add(1);
+            }
+        }
+        Ok(())
+    }
+
+    /// Retire triangle `slot`; a corner left in no triangle stops being a vertex.
+    fn remove_tri(&mut self, slot: usize) {
+        let Some(tri) = self.tris.get_mut(slot) else {
+            return;
+        };
+        tri.alive = false;
+        let v = tri.v;
+        for i in v {
+            if let Some(deg) = self.degree.get_mut(i as usize) {
+                *deg = deg.saturating_sub(1);
+                if *deg == 0 {
+                    self.vertex_count = self.vertex_count.saturating_sub(1);
+                }
+            }
+        }
+    }
+
+    /// Add outside points one at a time, farthest first, until none is left or the hull
+    /// has [`MAX_HULL_VERTICES`] vertices (then the hull is *reduced*).
+    ///
+    /// Departure from Barber et al.: a point less than `eps` above a triangle is dropped
+    /// as "on the hull", but near a sharp edge of a thin hull it can be farther than `eps`
+    /// from the hull, and a later triangle there may leave it more than `eps` outside.
+    /// So when no outside point is left, every non-vertex point is tested against every
+    /// triangle again ([`Builder::rescan`]), at most [`MAX_RESCANS`] times.
+    fn run(&mut self) -> Result<(), Error> {
+        let mut rescans = 0;
+        for _ in 0..MAX_INSERTIONS {
+            let mut next = self.farthest_outside();
+            if next.is_none() && rescans < MAX_RESCANS {
+                rescans += 1;
+                self.rescan();
+                next = self.farthest_outside();
+            }
+            let Some(i) = next else {
+                return Ok(());
+            };
+            if self.vertex_count >= MAX_HULL_VERTICES {
+                self.reduced = true;
+                return Ok(());
+            }
+            self.add_point(i)?;
+        }
+        Err(Error::Hull(HullError::TooComplex))
+    }
+
+    /// Give every point that is not a vertex to the live triangle it is farthest above,
+    /// if more than `eps`.
+    fn rescan(&mut self) {
+        let mut live = [NONE; MAX_WORK_TRIS];
+        let mut count = 0;
+        for (slot, t) in self.tris.iter().enumerate() {
+            if t.alive {
+                live[count] = slot as u8;
+                count += 1;
+            }
+        }
+        let live = live.get(..count).unwrap_or(&[]);
+        for i in 0..self.points.len().min(MAX_HULL_INPUT_POINTS) {
+            if self.degree[i] == 0 {
+                self.assign(i, live);
+            }
+        }
+    }
+
+    /// The outside point highest above its owner (lowest index on ties).
+    fn farthest_outside(&self) -> Option<usize> {
+        let mut best = None;
+        let mut best_h = 0.0f64;
+        let n = self.points.len();
+        for (i, (&o, &h)) in self
+            .owner
+            .iter()
+            .zip(self.height.iter())
+            .take(n)
+            .enumerate()
+        {
+            if (o as usize) < MAX_WORK_TRIS && h > best_h {
+                best = Some(i);
+                best_h = h;
+            }
+        }
+        best
+    }
+
+    /// One quickhull step: retire every triangle the point sees (a connected region grown
+    /// from its owner), and close the hole with a cone of triangles from the point to the
+    /// region's boundary (the horizon). Points above retired triangles are shared out
+    /// among the new ones.
+    fn add_point(&mut self, i: usize) -> Result<(), Error> {
+        let p = point_at(self.points, i);
+        let seed = self.owner.get(i).copied().unwrap_or(NONE);
+        if let Some(o) = self.owner.get_mut(i) {
+            *o = NONE;
+        }
+        self.mark_visible(p, seed);
+        let mut horizon = [Edge::default(); MAX_HORIZON];
+        let Some(count) = self.settle_horizon(p, &mut horizon) else {
+            // No convex cone: the point is inconsistent with the mesh at the scale of
+            // `eps` (a few `eps` above one triangle, as far below its nearly coplanar
+            // neighbour). Leave it out; a rescan retries it once the hull has grown.
+            return Ok(());
+        };
+        let horizon = horizon.get(..count).unwrap_or(&[]);
+
+        // Points above retired triangles wait for the cone.
+        let n = self.points.len();
+        for o in self.owner.iter_mut().take(n) {
+            if self
+                .tris
+                .get(*o as usize)
+                .is_some_and(|t| t.alive && t.visible)
+            {
+                *o = PENDING;
+            }
+        }
+        for s in 0..MAX_WORK_TRIS {
+            if self.tris[s].alive && self.tris[s].visible {
+                self.remove_tri(s);
+            }
+        }
+
+        // The cone: triangle k is (a_k, b_k, p); its neighbours are the outer triangle
+        // across the horizon edge and the cone triangles k + 1 (across b_k → p) and k − 1
+        // (across p → a_k).
+        let mut slots = [NONE; MAX_HORIZON];
+        let mut free = (0..MAX_WORK_TRIS).filter(|&s| !self.tris[s].alive);
+        for slot in slots.iter_mut().take(count) {
+            *slot = free.next().ok_or(Error::Hull(HullError::TooComplex))? as u8;
+        }
+        let slots = slots.get(..count).unwrap_or(&[]);
+        for (k, (e, &slot)) in horizon.iter().zip(slots).enumerate() {
+            self.add_tri(slot as usize, [e.a, e.b, i as u16])?;
+            let after = slots.get((k + 1) % count).copied().unwrap_or(NONE);
+            let before = slots.get((k + count - 1) % count).copied().unwrap_or(NONE);
+            self.tris[slot as usize].adj = [e.outer, after, before];
+            let outer = self
+                .tris
+                .get_mut(e.outer as usize)
+                .filter(|t| t.alive)
+                .ok_or(Error::Hull(HullError::TooComplex))?;
+            let j = outer
+                .edge_index(e.b, e.a)
+                .ok_or(Error::Hull(HullError::TooComplex))?;
+            outer.adj[j] = slot;
+        }
+
+        for j in 0..n {
+            if self.owner.get(j) == Some(&PENDING) {
+                self.assign(j, slots);
+            }
+        }
+        Ok(())
+    }
+
+    /// Mark the triangles `p` sees: the connected region, grown through shared edges
+    /// from `seed`, of triangles `p` is more than `eps` above (Barber et al.).
+    fn mark_visible(&mut self, p: D3, seed: u8) {
+        for t in self.tris.iter_mut() {
+            t.visible = false;
+        }
+        let mut stack = [0u8; MAX_WORK_TRIS];
+        let mut len = 0;
+        if let Some(t) = self.tris.get_mut(seed as usize).filter(|t| t.alive) {
+            t.visible = true;
+            stack[0] = seed;
+            len = 1;
+        }
+        // Each triangle is pushed at most once (when it turns visible).
+        while len > 0 {
+            len -= 1;
+            let adj = self
+                .tris
+                .get(stack[len] as usize)
+                .map_or([NONE; 3], |t| t.adj);
+            for nb in adj {
+                let Some(t) = self.tris.get_mut(nb as usize) else {
+                    continue;
+                };
+                if t.alive && !t.visible && t.height(p) > self.eps && len < MAX_WORK_TRIS {
+                    t.visible = true;
+                    stack[len] = nb;
+                    len += 1;
+                }
+            }
+        }
+    }
+
+    /// Grow the visible region until its horizon is one simple loop and the cone from
+    /// `p` to it is convex: no hull vertex more than `FOLD_FRACTION · eps` above any cone
+    /// triangle, where that can be mended (see [`Builder::absorb_folds`]). Returns the
+    /// horizon's length, or `None` when there is no such cone.
+    ///
+    /// Departure from Barber et al.: a triangle that `p` is above by less than `eps` is
+    /// not visible, and the cone triangle `(a, b, p)` on its edge then folds over it. On a
+    /// thin hull that fold leaves vertices several `eps` outside, and when `p` is nearly in
+    /// the plane of a flat region the cone triangle can even come out upside down. Each
+    /// round makes the triangle beyond every offending horizon edge visible; each round
+    /// that does not finish makes at least one more triangle visible.
+    fn settle_horizon(&mut self, p: D3, horizon: &mut [Edge; MAX_HORIZON]) -> Option<usize> {
+        let mut vertices = [0u16; MAX_HULL_VERTICES];
+        let mut nv = 0usize;
+        let n = self.points.len().min(MAX_HULL_INPUT_POINTS);
+        for (i, &d) in self.degree.iter().enumerate().take(n) {
+            if d > 0 {
+                *vertices.get_mut(nv)? = i as u16;
+                nv += 1;
+            }
+        }
+        let vertices = vertices.get(..nv)?;
+        for _ in 0..MAX_WORK_TRIS {
+            let grew = match self.horizon_loop(horizon) {
+                Some(c) => match self.absorb_folds(p, horizon.get(..c)?, vertices) {
+                    Folds::Absorbed => true,
+                    Folds::Mild => return Some(c),
+                    Folds::Stuck => return None,
+                },
+                None => self.grow_visible(p),
+            };
+            if !grew {
+                return None;
+            }
+        }
         None
     }
+
+    /// Check the cone over `horizon` for folds: cone triangles with a hull vertex more
+    /// than `FOLD_FRACTION · eps` above them (or no area). The triangle beyond a fold is
+    /// made visible when `p` is not more than `eps` below it ([`Folds::Absorbed`]). A fold
+    /// whose triangle `p` is farther below cannot be mended that way; when it leaves a
+    /// vertex more than `eps` outside, the cone is refused ([`Folds::Stuck`]), else
+    /// accepted ([`Folds::Mild`]).
+    fn absorb_folds(&mut self, p: D3, horizon: &[Edge], vertices: &[u16]) -> Folds {
+        let limit = FOLD_FRACTION * self.eps;
+        let mut absorbed = false;
+        let mut stuck = false;
+        for e in horizon {
+            let a = self.point(e.a);
+            let worst = match self.point(e.b).sub(a).cross(p.sub(a)).unit() {
+                Some(n) => vertices
+                    .iter()
+                    .map(|&v| n.dot(self.point(v).sub(a)))
+                    .fold(f64::NEG_INFINITY, |m, h| if h > m { h } else { m }),
+                None => f64::INFINITY,
+            };
+            if worst <= limit {
+                continue;
+            }
+            let eps = self.eps;
+            match self.tris.get_mut(e.outer as usize).filter(|t| t.alive) {
+                Some(t) if !t.visible && t.height(p) > -eps => {
+                    t.visible = true;
+                    absorbed = true;
+                }
+                _ => stuck |= worst > eps,
+            }
+        }
+        if absorbed {
+            Folds::Absorbed
+        } else if stuck {
+            Folds::Stuck
+        } else {
+            Folds::Mild
+        }
+    }
+
+    /// When the horizon is not one simple loop (never seen in testing, but not ruled out
+    /// by rounding), add to the visible set every triangle next to it that `p` is less
+    /// than `eps` below. Returns false when there was none.
+    fn grow_visible(&mut self, p: D3) -> bool {
+        let mut grow = [false; MAX_WORK_TRIS];
+        for (g, t) in grow.iter_mut().zip(self.tris.iter()) {
+            let touches = t
+                .adj
+                .iter()
+                .any(|&nb| self.tri(nb).is_some_and(|u| u.visible));
+            *g = t.alive && !t.visible && t.height(p) > -self.eps && touches;
+        }
+        let mut grew = false;
+        for (g, t) in grow.iter().zip(self.tris.iter_mut()) {
+            if *g {
+                t.visible = true;
+                grew = true;
+            }
+        }
+        grew
+    }
+
+    /// The boundary of the visible region as one loop of edges `out[k].b == out[k+1].a`,
+    /// or `None` when it is not a single simple loop (or longer than [`MAX_HORIZON`]).
+    fn horizon_loop(&self, out: &mut [Edge; MAX_HORIZON]) -> Option<usize> {
+        let mut edges = [Edge::default(); MAX_HORIZON];
+        let mut count = 0;
+        for t in self.tris.iter().filter(|t| t.alive && t.visible) {
+            for k in 0..3 {
+                let nb = t.adj[k];
+                if self.tri(nb).is_some_and(|u| u.visible) {
+                    continue;
+                }
+                *edges.get_mut(count)? = Edge {
+                    a: t.v[k],
+                    b: t.next(k),
+                    outer: nb,
+                };
+                count += 1;
+            }
+        }
+        chain_loop(edges.get(..count)?, 0, out)
+    }
+
+    // -----------------------------------------------------------------------------------
+    // Stage 3: faces.
+    // -----------------------------------------------------------------------------------
+
+    /// Turn the triangle mesh into the hull's polygon faces and fill a [`ConvexHull`].
+    fn finish(mut self) -> Result<ConvexHull, Error> {
+        // Between two planes 2 eps apart: within eps of the plane between them.
+        if self.width() <= 2.0 * self.eps {
+            return Err(Error::Hull(HullError::Coplanar));
+        }
+        let mut polys = Polygons::new();
+        self.merge_coplanar(&mut polys)?;
+        self.drop_flat_vertices(&mut polys);
+
+        let mut hull = EMPTY_HULL;
+        hull.tolerance = self.eps as f32;
+        hull.reduced = self.reduced;
+        // Vertices: the points still used, in input order; `owner` now maps an input index
+        // to its output index.
+        let n = self.points.len();
+        let mut vc = 0usize;
+        for (i, (o, &deg)) in self
+            .owner
+            .iter_mut()
+            .zip(self.degree.iter())
+            .take(n)
+            .enumerate()
+        {
+            *o = NONE;
+            if deg > 0 {
+                let slot = hull
+                    .vertices
+                    .get_mut(vc)
+                    .ok_or(Error::Hull(HullError::TooComplex))?;
+                *slot = self.points.get(i).copied().unwrap_or(Vec3::ZERO);
+                *o = vc as u8;
+                vc += 1;
+            }
+        }
+        hull.vertex_count = vc as u8;
+
+        for k in 0..polys.count {
+            let mut corners = [0u8; MAX_HULL_VERTICES];
+            let mut len = 0usize;
+            for &c in polys.corners(k) {
+                let o = self.owner.get(c as usize).copied().unwrap_or(NONE);
+                if o == NONE {
+                    return Err(Error::Hull(HullError::TooComplex));
+                }
+                *corners
+                    .get_mut(len)
+                    .ok_or(Error::Hull(HullError::TooComplex))? = o;
+                len += 1;
+            }
+            let corners = corners.get_mut(..len).unwrap_or(&mut []);
+            // Start at the lowest-index vertex.
+            let first = (0..len).min_by_key(|&j| corners[j]).unwrap_or(0);
+            corners.rotate_left(first);
+            emit_split(&mut hull, corners, polys.plane(k))?;
+        }
+
+        if hull.face_count < 4 || hull.vertex_count < 4 {
+            return Err(Error::Hull(HullError::Coplanar));
+        }
+        // Not seen after the width test, but a hull without volume is flat.
+        let (_, centroid, _) = hull
+            .volume_integrals()
+            .ok_or(Error::Hull(HullError::Coplanar))?;
+        hull.centroid = centroid;
+        Ok(hull)
+    }
+
+    /// The mesh's smallest width over its triangle normals: for each triangle, the depth
+    /// of the deepest vertex below it. The initial tetrahedron only proves the cloud
+    /// thicker than `eps` along one normal; when the finished hull fits between two
+    /// planes `2 eps` apart, every point is within `eps` of the plane between them: the
+    /// cloud is coplanar after all (and merging near-coplanar triangles could fold it
+    /// flat).
+    fn width(&self) -> f64 {
+        let mut width = f64::INFINITY;
+        for t in self.tris.iter().filter(|t| t.alive) {
+            let mut deepest = 0.0f64;
+            for (i, _) in self.degree.iter().enumerate().filter(|(_, &d)| d > 0) {
+                let depth = -t.height(point_at(self.points, i));
+                if depth > deepest {
+                    deepest = depth;
+                }
+            }
+            if deepest < width {
+                width = deepest;
+            }
+        }
+        width
+    }
+
+    /// Are all corners of `t` within `eps` of the plane of `seed`, on the same side?
+    fn near_plane(&self, seed: &Tri, t: &Tri) -> bool {
+        seed.n.dot(t.n) > 0.0
+            && t.v.iter().all(|&i| {
+                let h = seed.height(self.point(i));
+                h <= self.eps && h >= -self.eps
+            })
+    }
+
+    /// Group the triangles into near-coplanar patches, each grown (breadth first, through
+    /// shared edges) from its lowest-slot triangle and judged against that seed's plane,
+    /// so a patch cannot drift; then write each patch's boundary loop as one polygon. A
+    /// patch whose boundary is not one simple loop keeps its triangles as faces.
+    fn merge_coplanar(&self, polys: &mut Polygons) -> Result<(), Error> {
+        // Seeds by decreasing area (ties: lower slot), so a patch is judged against the
+        // plane of its largest triangle and slivers join a large neighbour.
+        let mut order = [0u8; MAX_WORK_TRIS];
+        let mut area2 = [0.0f64; MAX_WORK_TRIS];
+        let mut live = 0usize;
+        for (slot, t) in self.tris.iter().enumerate().filter(|(_, t)| t.alive) {
+            let [a, b, c] = t.v.map(|i| self.point(i));
+            area2[slot] = b.sub(a).cross(c.sub(a)).length_squared();
+            order[live] = slot as u8;
+            live += 1;
+        }
+        let order = order.get_mut(..live).unwrap_or(&mut []);
+        order.sort_unstable_by(|&x, &y| {
+            let (ax, ay) = (area2[x as usize], area2[y as usize]);
+            ay.total_cmp(&ax).then(x.cmp(&y))
+        });
+
+        let mut group = [NONE; MAX_WORK_TRIS];
+        let mut stack = [0u8; MAX_WORK_TRIS];
+        let mut groups = 0u8;
+        for &seed in order.iter() {
+            let seed = seed as usize;
+            let seed_tri = self.tris[seed];
+            if !seed_tri.alive || group[seed] != NONE {
+                continue;
+            }
+            let g = groups;
+            groups = groups.saturating_add(1);
+            group[seed] = g;
+            stack[0] = seed as u8;
+            let mut len = 1;
+            // Each triangle is pushed at most once (when it joins the group).
+            while len > 0 {
+                len -= 1;
+                let adj = self
+                    .tris
+                    .get(stack[len] as usize)
+                    .map_or([NONE; 3], |t| t.adj);
+                for nb in adj {
+                    let Some(t) = self.tri(nb) else {
+                        continue;
+                    };
+                    let slot = nb as usize;
+                    if group.get(slot) == Some(&NONE)
+                        && self.near_plane(&seed_tri, t)
+                        && len < MAX_WORK_TRIS
+                    {
+                        group[slot] = g;
+                        stack[len] = nb;
+                        len += 1;
+                    }
+                }
+            }
+            if !self.push_patch(g, &group, &seed_tri, polys)? {
+                for (t, _) in self
+                    .tris
+                    .iter()
+                    .zip(group.iter())
+                    .filter(|(_, &gg)| gg == g)
+                {
+                    let first = (0..3).min_by_key(|&k| t.v[k]).unwrap_or(0);
+                    let mut v = t.v;
+                    v.rotate_left(first);
+                    polys.push(&v, self.plane_over(t.n, &v))?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Write patch `g`'s boundary as one polygon, starting at its lowest-index corner.
+    /// Returns false (writing nothing) when the boundary is not a single simple loop or
+    /// not convex within `eps` about the seed's normal (a patch can wrap around a sliver
+    /// that another patch took).
+    fn push_patch(
+        &self,
+        g: u8,
+        group: &[u8; MAX_WORK_TRIS],
+        seed: &Tri,
+        polys: &mut Polygons,
+    ) -> Result<bool, Error> {
+        let mut edges = [Edge::default(); MAX_HORIZON];
+        let mut count = 0usize;
+        for (t, _) in self
+            .tris
+            .iter()
+            .zip(group.iter())
+            .filter(|(_, &gg)| gg == g)
+        {
+            for k in 0..3 {
+                if group.get(t.adj[k] as usize) == Some(&g) {
+                    continue;
+                }
+                let Some(e) = edges.get_mut(count) else {
+                    return Ok(false);
+                };
+                *e = Edge {
+                    a: t.v[k],
+                    b: t.next(k),
+                    outer: t.adj[k],
+                };
+                count += 1;
+            }
+        }
+        let edges = edges.get(..count).unwrap_or(&[]);
+        let start = (0..count).min_by_key(|&j| edges[j].a).unwrap_or(0);
+        let mut ordered = [Edge::default(); MAX_HORIZON];
+        let Some(len) = chain_loop(edges, start, &mut ordered) else {
+            return Ok(false);
+        };
+        let mut corners = [0u16; MAX_HORIZON];
+        for (c, e) in corners.iter_mut().zip(ordered.iter()).take(len) {
+            *c = e.a;
+        }
+        let corners = corners.get(..len).unwrap_or(&[]);
+        if !self.is_convex(corners, seed.n) {
+            return Ok(false);
+        }
+        // The plane: the seed's normal, raised over every corner of every triangle in the
+        // patch, so the points the merge drops from the middle stay under it.
+        let mut d = f64::NEG_INFINITY;
+        for (t, _) in self
+            .tris
+            .iter()
+            .zip(group.iter())
+            .filter(|(_, &gg)| gg == g)
+        {
+            let (_, dt) = self.plane_over(seed.n, &t.v);
+            if dt > d {
+                d = dt;
+            }
+        }
+        polys.push(corners, (seed.n, d))?;
+        Ok(true)
+    }
+
+    /// The plane with normal `n` through the highest of `corners`.
+    fn plane_over(&self, n: D3, corners: &[u16]) -> (D3, f64) {
+        let mut d = f64::NEG_INFINITY;
+        for &i in corners {
+            let h = n.dot(self.point(i));
+            if h > d {
+                d = h;
+            }
+        }
+        (n, d)
+    }
+
+    /// Is the polygon convex and counter-clockwise about `n`, within `eps`: every corner
+    /// at most `eps` to the right of every edge, `((b − a) × (c − a)) · n ≥ −eps |b − a|`?
+    fn is_convex(&self, corners: &[u16], n: D3) -> bool {
+        let next = corners.iter().skip(1).chain(corners.first());
+        for (&i, &j) in corners.iter().zip(next) {
+            let (a, b) = (self.point(i), self.point(j));
+            let ab = b.sub(a);
+            let slack = self.eps * sqrt64(ab.length_squared()).unwrap_or(0.0);
+            for &k in corners {
+                if ab.cross(self.point(k).sub(a)).dot(n) < -slack {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// Count each point's polygons into `degree`, then drop the points that no longer
+    /// shape the hull: in no polygon (inside a merged face) or in exactly two (on a
+    /// straight edge between two faces, removed from both, when both keep at least three
+    /// corners).
+    fn drop_flat_vertices(&mut self, polys: &mut Polygons) {
+        for d in self.degree.iter_mut() {
+            *d = 0;
+        }
+        for k in 0..polys.count {
+            for &c in polys.corners(k) {
+                if let Some(d) = self.degree.get_mut(c as usize) {
+                    *d = d.saturating_add(1);
+                }
+            }
+        }
+        let n = self.points.len();
+        for i in 0..n.min(MAX_HULL_INPUT_POINTS) {
+            if self.degree[i] != 2 {
+                continue;
+            }
+            let mut holders = [0usize; 2];
+            let mut found = 0;
+            for k in 0..polys.count {
+                if polys.corners(k).contains(&(i as u16)) {
+                    if let Some(h) = holders.get_mut(found) {
+                        *h = k;
+                    }
+                    found += 1;
+                }
+            }
+            if found == 2 && holders.iter().all(|&k| polys.corners(k).len() > 3) {
+                for &k in &holders {
+                    polys.remove_corner(k, i as u16);
+                }
+                self.degree[i] = 0;
+            }
+        }
+    }
+}
+
+/// Order `edges` into one loop starting at `edges[start]`, each edge's `b` the next one's
+/// `a`, into `out`; `None` unless they form exactly one simple loop (every start vertex
+/// distinct, every edge used once, at least 3 edges).
+fn chain_loop(edges: &[Edge], start: usize, out: &mut [Edge; MAX_HORIZON]) -> Option<usize> {
+    let count = edges.len();
+    if !(3..=MAX_HORIZON).contains(&count) {
+        return None;
+    }
+    for (k, e) in edges.iter().enumerate() {
+        if edges.iter().skip(k + 1).any(|f| f.a == e.a) {
+            return None;
+        }
+    }
+    let mut used = [false; MAX_HORIZON];
+    let mut current = *edges.get(start)?;
+    *used.get_mut(start)? = true;
+    out[0] = current;
+    for slot in out.iter_mut().take(count).skip(1) {
+        let j = (0..count).find(|&j| !used[j] && edges[j].a == current.b)?;
+        used[j] = true;
+        current = edges[j];
+        *slot = current;
+    }
+    if current.b == out[0].a {
+        Some(count)
+    } else {
+        None
+    }
+}
+
+/// Polygons (corner lists of input indices) between the merge and the output.
+/// Every triangle edge is a boundary edge of at most one polygon, so the corners of all
+/// polygons number at most three per triangle.
+struct Polygons {
+    start: [u16; MAX_WORK_TRIS],
+    len: [u8; MAX_WORK_TRIS],
+    corners: [u16; 3 * MAX_WORK_TRIS],
+    /// Each polygon's plane `n · p = d`.
+    planes: [(D3, f64); MAX_WORK_TRIS],
+    count: usize,
+    used: usize,
+}
+
+impl Polygons {
+    fn new() -> Polygons {
+        Polygons {
+            start: [0; MAX_WORK_TRIS],
+            len: [0; MAX_WORK_TRIS],
+            corners: [0; 3 * MAX_WORK_TRIS],
+            planes: [(D3::ZERO, 0.0); MAX_WORK_TRIS],
+            count: 0,
+            used: 0,
+        }
+    }
+
+    fn push(&mut self, corners: &[u16], plane: (D3, f64)) -> Result<(), Error> {
+        let full = Error::Hull(HullError::TooComplex);
+        *self.planes.get_mut(self.count).ok_or(full)? = plane;
+        let dst = self
+            .corners
+            .get_mut(self.used..self.used + corners.len())
+            .ok_or(full)?;
+        dst.copy_from_slice(corners);
+        *self.start.get_mut(self.count).ok_or(full)? = self.used as u16;
+        *self.len.get_mut(self.count).ok_or(full)? = corners.len() as u8;
+        self.count += 1;
+        self.used += corners.len();
+        Ok(())
+    }
+
+    fn plane(&self, k: usize) -> (D3, f64) {
+        self.planes.get(k).copied().unwrap_or((D3::ZERO, 0.0))
+    }
+
+    fn corners(&self, k: usize) -> &[u16] {
+        let s = self.start.get(k).copied().unwrap_or(0) as usize;
+        let l = self.len.get(k).copied().unwrap_or(0) as usize;
+        self.corners.get(s..s + l).unwrap_or(&[])
+    }
+
+    fn remove_corner(&mut self, k: usize, vertex: u16) {
+        let s = self.start.get(k).copied().unwrap_or(0) as usize;
+        let Some(len) = self.len.get_mut(k) else {
+            return;
+        };
+        let Some(c) = self.corners.get_mut(s..s + *len as usize) else {
+            return;
+        };
+        if let Some(j) = c.iter().position(|&v| v == vertex) {
+            c.copy_within(j + 1.., j);
+            *len -= 1;
+        }
+    }
+}
+
+/// Write one polygon (output vertex indices, counter-clockwise, first corner lowest) with
+/// its plane as faces: whole when it has at most [`MAX_FACE_VERTICES`] corners, else as a
+/// fan of pieces from corner 0: `0, 1..=15`, `0, 15..=29`, ... (each piece a convex
+/// sub-polygon in the same plane).
+fn emit_split(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<(), Error> {
+    let len = corners.len();
+    if len <= MAX_FACE_VERTICES {
+        return emit_face(hull, corners, plane);
+    }
+    let mut piece = [0u8; MAX_FACE_VERTICES];
+    piece[0] = corners.first().copied().unwrap_or(0);
+    let mut s = 1usize;
+    // Each piece advances s by MAX_FACE_VERTICES − 2 ≥ 1.
+    while s + 1 < len {
+        let end = (s + MAX_FACE_VERTICES - 2).min(len - 1);
+        let src = corners.get(s..=end).unwrap_or(&[]);
+        let dst = piece.get_mut(1..1 + src.len()).unwrap_or(&mut []);
+        dst.copy_from_slice(src);
+        emit_face(hull, piece.get(..1 + src.len()).unwrap_or(&[]), plane)?;
+        s = end;
+    }
+    Ok(())
+}
+
+/// Append one face with its plane `(n, d)` rounded to f32; the offset is raised, if
+/// rounding needs it, to the largest `n · c` over the corners in f32, so every corner lies
+/// on or below the stored plane.
+fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<(), Error> {
+    let full = Error::Hull(HullError::TooComplex);
+    let f = hull.face_count as usize;
+    let start = hull
+        .face_start
+        .get(f.wrapping_sub(1))
+        .zip(hull.face_len.get(f.wrapping_sub(1)))
+        .map_or(0, |(&s, &l)| s as usize + l as usize);
+    let dst = hull
+        .face_indices
+        .get_mut(start..start + corners.len())
+        .ok_or(full)?;
+    dst.copy_from_slice(corners);
+    let (n64, d64) = plane;
+    let n = n64.unit().ok_or(full)?.to_f32();
+    let mut d = d64 as f32;
+    for &c in corners {
+        d = scalar::max(d, n.dot(hull.core_vertex(c as u32)));
+    }
+    if !d.is_finite() {
+        return Err(full);
+    }
+    *hull.normals.get_mut(f).ok_or(full)? = n;
+    *hull.offsets.get_mut(f).ok_or(full)? = d;
+    *hull.face_start.get_mut(f).ok_or(full)? = start as u16;
+    *hull.face_len.get_mut(f).ok_or(full)? = corners.len() as u8;
+    hull.face_count += 1;
+    Ok(())
 }

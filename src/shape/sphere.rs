@@ -38,11 +38,16 @@ impl Sphere {
     }
 }
 
-/// Ray against a ball at `center`: the smaller root of `|o + t d − c|² = r²`.
+/// Ray against a ball at `center`. With `m = o − c` and `b = m · d` (d unit), the ray's
+/// closest approach to the centre is `q = m − b d`, and it meets the sphere at
+/// `t = −b − √(r² − |q|²)`. Taking `r² − |q|²` from `q`, not the textbook `b² − (|m|² − r²)`,
+/// avoids the cancellation that loses the root for a small sphere far from the origin, and
+/// the overflow of `b²` that turned a miss 10²⁰ m away into a hit at `t = 0` (Haines et
+/// al., "Precision Improvements for Ray/Sphere Intersection", Ray Tracing Gems, 2019).
 pub(crate) fn cast_ray_sphere(ray: &Ray, center: Vec3, radius: f32, max_t: f32) -> Option<RayHit> {
     let m = ray.origin - center;
-    let c = m.length_squared() - radius * radius;
-    if c <= 0.0 {
+    let r2 = radius * radius;
+    if m.length_squared() <= r2 {
         return Some(RayHit {
             t: 0.0,
             point: ray.origin,
@@ -50,15 +55,16 @@ pub(crate) fn cast_ray_sphere(ray: &Ray, center: Vec3, radius: f32, max_t: f32) 
         });
     }
     let b = m.dot(ray.direction);
-    if b > 0.0 {
+    if b > 0.0 || b.is_nan() {
+        return None; // outside and moving away (NaN only from overflow)
+    }
+    let q = m - ray.direction * b;
+    let h2 = r2 - q.length_squared();
+    if h2 < 0.0 || h2.is_nan() {
         return None;
     }
-    let disc = b * b - c;
-    if disc < 0.0 {
-        return None;
-    }
-    let t = scalar::max(-b - scalar::sqrt(disc), 0.0);
-    if t > max_t {
+    let t = scalar::max(-b - scalar::sqrt(h2), 0.0);
+    if t > max_t || t.is_nan() {
         return None;
     }
     let point = ray.at(t);

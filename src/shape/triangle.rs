@@ -16,6 +16,10 @@ pub struct Triangle {
 /// Smallest area (m²) of a usable triangle.
 const MIN_AREA: f32 = 1.0e-12;
 
+/// Below this `|cos|` of the angle between a ray and the triangle's normal, the ray is
+/// treated as parallel to the triangle (a miss).
+const PARALLEL_COS: f32 = 1.0e-7;
+
 impl Triangle {
     /// A triangle; vertices must be finite and not collinear.
     pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Result<Triangle, Error> {
@@ -23,7 +27,7 @@ impl Triangle {
             finite_vec(v, Input::Point)?;
         }
         let n = (b - a).cross(c - a);
-        if !(0.5 * n.length() > MIN_AREA) {
+        if 0.5 * n.length() <= MIN_AREA || n.length_squared().is_nan() {
             return Err(Error::NotPositive(Input::Point));
         }
         Ok(Triangle {
@@ -57,7 +61,11 @@ impl Triangle {
     /// The triangle itself, facing `dir`'s side.
     pub(crate) fn supporting_face(&self, dir: Vec3) -> Face {
         let n = self.normal();
-        let order: [usize; 3] = if n.dot(dir) >= 0.0 { [0, 1, 2] } else { [0, 2, 1] };
+        let order: [usize; 3] = if n.dot(dir) >= 0.0 {
+            [0, 1, 2]
+        } else {
+            [0, 2, 1]
+        };
         let front = order[1] == 1;
         let mut f = Face::new(
             if front { n } else { -n },
@@ -66,7 +74,11 @@ impl Triangle {
         for k in 0..3 {
             let i = order[k] as u32;
             let j = order[(k + 1) % 3] as u32;
-            f.push(self.vertices[i as usize], FeatureId::vertex(i), FeatureId::edge(i, j));
+            f.push(
+                self.vertices[i as usize],
+                FeatureId::vertex(i),
+                FeatureId::edge(i, j),
+            );
         }
         f
     }
@@ -89,14 +101,19 @@ impl Triangle {
         r
     }
 
-    /// Two-sided Möller–Trumbore ray cast in the local frame.
+    /// Two-sided Möller–Trumbore ray cast in the local frame. The ray counts as parallel
+    /// when the cosine of its angle to the triangle's normal is below 1e-7 (a test
+    /// relative to the triangle's size, so small triangles are not missed); NaN-safe
+    /// compares keep an overflowed barycentric from slipping through as a hit.
     pub fn cast_ray(&self, ray: &Ray, max_t: f32) -> Option<RayHit> {
         let [a, b, c] = self.vertices;
         let e1 = b - a;
         let e2 = c - a;
         let p = ray.direction.cross(e2);
+        // det = e1 · (d × e2) = −d · (e1 × e2) = −|e1 × e2| cos θ.
         let det = e1.dot(p);
-        if scalar::abs(det) < 1.0e-12 {
+        let parallel = PARALLEL_COS * e1.cross(e2).length();
+        if scalar::abs(det) <= parallel || det.is_nan() {
             return None;
         }
         let inv = 1.0 / det;
@@ -107,11 +124,11 @@ impl Triangle {
         }
         let q = s.cross(e1);
         let v = ray.direction.dot(q) * inv;
-        if v < 0.0 || u + v > 1.0 {
+        if !(v >= 0.0 && u + v <= 1.0) {
             return None;
         }
         let t = e2.dot(q) * inv;
-        if t < 0.0 || t > max_t {
+        if !(t >= 0.0 && t <= max_t) {
             return None;
         }
         let n = self.normal();
