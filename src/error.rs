@@ -63,7 +63,8 @@ pub enum Pool {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HullError {
-    /// Fewer than 4 distinct points were given.
+    /// Fewer than 4 points were given (clouds of duplicates report what they reduce
+    /// to: `Coincident`, `Collinear` or `Coplanar`).
     TooFewPoints,
     /// All points are (nearly) the same point.
     Coincident,

@@ -601,8 +601,20 @@ fn properties_hold_for_random_pairs_of_every_kind() {
 
 #[test]
 fn degenerate_inputs_give_no_nan() {
-    let tiny = Shape::cuboid(Vec3::splat(1.0e-6)).unwrap();
-    let huge = Shape::cuboid(Vec3::splat(1.0e6)).unwrap();
+    // Sizes outside the documented range are refused; the extremes of the range work.
+    use carom::shape::{MAX_SIZE, MIN_SIZE};
+    use carom::{Error, Input};
+    assert_eq!(
+        Shape::cuboid(Vec3::splat(1.0e-6)),
+        Err(Error::OutOfRange(Input::HalfExtents))
+    );
+    assert_eq!(Shape::sphere(1.0e6), Err(Error::OutOfRange(Input::Radius)));
+    assert_eq!(
+        Shape::capsule(MIN_SIZE * 0.5, 1.0),
+        Err(Error::OutOfRange(Input::HalfHeight))
+    );
+    let tiny = Shape::cuboid(Vec3::splat(MIN_SIZE)).unwrap();
+    let huge = Shape::cuboid(Vec3::splat(MAX_SIZE)).unwrap();
     let ball = Shape::sphere(1.0).unwrap();
     let cap = Shape::capsule(1.0, 0.5).unwrap();
     let flat = Shape::triangle(Vec3::ZERO, Vec3::X, Vec3::new(0.0, 0.0, 1.0e-5)).unwrap();

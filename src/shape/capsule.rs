@@ -2,7 +2,7 @@
 //! radius. Core vertex 0 is the bottom end, 1 the top.
 
 use super::{sphere::cast_ray_sphere, Face, FeatureId, MassProperties, Ray, RayHit};
-use crate::error::{positive, Error, Input};
+use crate::error::{Error, Input};
 use crate::math::{scalar, Aabb, Iso, Mat3, Vec3};
 
 /// A capsule along local Y.
@@ -22,8 +22,8 @@ impl Capsule {
     /// A capsule; both sizes must be finite and positive.
     pub fn new(half_height: f32, radius: f32) -> Result<Capsule, Error> {
         Ok(Capsule {
-            half_height: positive(half_height, Input::HalfHeight)?,
-            radius: positive(radius, Input::Radius)?,
+            half_height: super::size(half_height, Input::HalfHeight)?,
+            radius: super::size(radius, Input::Radius)?,
         })
     }
 

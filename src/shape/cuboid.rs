@@ -17,11 +17,10 @@ impl Cuboid {
     /// A box; every half-extent must be finite and positive.
     pub fn new(half_extents: Vec3) -> Result<Cuboid, Error> {
         finite_vec(half_extents, Input::HalfExtents)?;
-        if half_extents.min_elem() > 0.0 {
-            Ok(Cuboid { half_extents })
-        } else {
-            Err(Error::NotPositive(Input::HalfExtents))
+        for h in half_extents.to_array() {
+            super::size(h, Input::HalfExtents)?;
         }
+        Ok(Cuboid { half_extents })
     }
 
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {

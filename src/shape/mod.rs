@@ -26,6 +26,24 @@ use crate::math::{Aabb, Iso, Mat3, Vec3};
 /// Most vertices a supporting face may have.
 pub const MAX_FACE_VERTICES: usize = 16;
 
+/// Smallest size (m) a sphere radius, capsule radius or half-height, or box half-extent may
+/// have: below it `f32` rounding in the narrow phase is no longer small against the shape.
+pub const MIN_SIZE: f32 = 1.0e-3;
+
+/// Largest size (m) of the same: past it, distances within the shape lose the millimetre
+/// precision the tolerances assume.
+pub const MAX_SIZE: f32 = 1.0e3;
+
+/// Check a size: finite, positive, and within [`MIN_SIZE`, `MAX_SIZE`].
+pub(crate) fn size(x: f32, what: Input) -> Result<f32, Error> {
+    crate::error::positive(x, what)?;
+    if (MIN_SIZE..=MAX_SIZE).contains(&x) {
+        Ok(x)
+    } else {
+        Err(Error::OutOfRange(what))
+    }
+}
+
 /// Half-size (m) of the bounding box reported for an unbounded half-space.
 pub const HALF_SPACE_EXTENT: f32 = 1.0e5;
 
@@ -220,17 +238,18 @@ pub enum Shape<'a> {
 }
 
 impl Shape<'static> {
-    /// A sphere of `radius` metres.
+    /// A sphere of `radius` metres (in [`MIN_SIZE`, `MAX_SIZE`]).
     pub fn sphere(radius: f32) -> Result<Shape<'static>, Error> {
         Ok(Shape::Sphere(Sphere::new(radius)?))
     }
 
-    /// A capsule along local Y: a segment of length `2 half_height` inflated by `radius`.
+    /// A capsule along local Y: a segment of length `2 half_height` inflated by `radius`
+    /// (both in [`MIN_SIZE`, `MAX_SIZE`]).
     pub fn capsule(half_height: f32, radius: f32) -> Result<Shape<'static>, Error> {
         Ok(Shape::Capsule(Capsule::new(half_height, radius)?))
     }
 
-    /// A box with the given half-extents (m).
+    /// A box with the given half-extents (m, each in [`MIN_SIZE`, `MAX_SIZE`]).
     pub fn cuboid(half_extents: Vec3) -> Result<Shape<'static>, Error> {
         Ok(Shape::Cuboid(Cuboid::new(half_extents)?))
     }
@@ -369,12 +388,18 @@ impl<'a> Shape<'a> {
     /// non-finite density and for shapes without volume.
     pub fn mass_properties(&self, density: f32) -> Result<MassProperties, Error> {
         crate::error::positive(density, Input::Density)?;
-        match self {
-            Shape::Sphere(s) => Ok(s.mass_properties(density)),
-            Shape::Capsule(c) => Ok(c.mass_properties(density)),
-            Shape::Cuboid(b) => Ok(b.mass_properties(density)),
-            Shape::Hull(h) => Ok(h.mass_properties(density)),
-            Shape::HalfSpace(_) | Shape::Triangle(_) => Err(Error::NoVolume),
+        let props = match self {
+            Shape::Sphere(s) => s.mass_properties(density),
+            Shape::Capsule(c) => c.mass_properties(density),
+            Shape::Cuboid(b) => b.mass_properties(density),
+            Shape::Hull(h) => h.mass_properties(density),
+            Shape::HalfSpace(_) | Shape::Triangle(_) => return Err(Error::NoVolume),
+        };
+        // A huge density times a large shape can overflow `f32`.
+        if props.mass.is_finite() && props.mass > 0.0 && props.inertia.is_finite() {
+            Ok(props)
+        } else {
+            Err(Error::OutOfRange(Input::Density))
         }
     }
 
@@ -385,6 +410,9 @@ impl<'a> Shape<'a> {
         crate::error::non_negative(max_t, Input::Distance)?;
         finite_vec(ray.origin, Input::Position)?;
         finite_vec(ray.direction, Input::Direction)?;
+        if crate::math::scalar::abs(ray.direction.length_squared() - 1.0) > 1.0e-3 {
+            return Err(Error::NotUnit(Input::Direction));
+        }
         crate::collide::check_pose(pose)?;
         Ok(self.cast_ray_unchecked(pose, ray, max_t))
     }

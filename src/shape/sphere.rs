@@ -1,7 +1,7 @@
 //! Sphere: a point core inflated by a radius.
 
 use super::{MassProperties, Ray, RayHit};
-use crate::error::{positive, Error, Input};
+use crate::error::{Error, Input};
 use crate::math::{scalar, Mat3, Vec3};
 
 /// A ball of `radius` metres centred on the local origin.
@@ -16,7 +16,7 @@ impl Sphere {
     /// A sphere; the radius must be finite and positive.
     pub fn new(radius: f32) -> Result<Sphere, Error> {
         Ok(Sphere {
-            radius: positive(radius, Input::Radius)?,
+            radius: super::size(radius, Input::Radius)?,
         })
     }
 
