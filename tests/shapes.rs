@@ -1326,3 +1326,42 @@ fn hull_size_is_documented() {
     let size = std::mem::size_of::<ConvexHull>();
     assert!((3 * 1024..4 * 1024).contains(&size), "{size}");
 }
+
+#[test]
+fn sizes_out_of_range_and_non_unit_rays_are_refused_exactly() {
+    use carom::shape::{Ray, MAX_SIZE, MIN_SIZE};
+    assert_eq!(
+        Shape::sphere(MIN_SIZE * 0.99),
+        Err(Error::OutOfRange(Input::Radius))
+    );
+    assert_eq!(
+        Shape::sphere(MAX_SIZE * 1.01),
+        Err(Error::OutOfRange(Input::Radius))
+    );
+    assert!(Shape::sphere(MIN_SIZE).is_ok() && Shape::sphere(MAX_SIZE).is_ok());
+    assert_eq!(
+        Shape::capsule(1.0, 2.0e3),
+        Err(Error::OutOfRange(Input::Radius))
+    );
+    assert_eq!(
+        Shape::cuboid(Vec3::new(1.0, 1.0e-4, 1.0)),
+        Err(Error::OutOfRange(Input::HalfExtents))
+    );
+    assert_eq!(Shape::sphere(-1.0), Err(Error::NotPositive(Input::Radius)));
+    // A ray built by hand with a non-unit direction is refused by cast_ray.
+    let ball = Shape::sphere(1.0).unwrap();
+    let ray = Ray {
+        origin: Vec3::new(-5.0, 0.0, 0.0),
+        direction: Vec3::new(2.0, 0.0, 0.0),
+    };
+    assert_eq!(
+        ball.cast_ray(&Iso::IDENTITY, &ray, 10.0),
+        Err(Error::NotUnit(Input::Direction))
+    );
+    // A density that overflows the mass is refused.
+    let big = Shape::cuboid(Vec3::splat(MAX_SIZE)).unwrap();
+    assert_eq!(
+        big.mass_properties(1.0e36),
+        Err(Error::OutOfRange(Input::Density))
+    );
+}
