@@ -262,3 +262,566 @@ pub struct ToiInput {
     /// Distance that counts as touching (m).
     pub tolerance: Len,
 }
+
+// ---------------------------------------------------------------------------------------
+// World operations (`world` target) and snapshot buffers (`snapshot` target)
+// ---------------------------------------------------------------------------------------
+
+use carom::props::{BodySpec, HandleRef, ShapeSpec, SnapshotEdit, WorldOp, MAX_HULL_POINTS};
+use carom::{BodyHandle, BodyKind, MassSpec, Material, QueryFilter, WorldConfig};
+
+/// kg/m³ per step of a tame density: (0, 8192] kg/m³.
+pub const DENSITY_UNIT: f32 = 1.0 / 8.0;
+/// kg per step of a tame mass: (0, 256] kg.
+pub const MASS_UNIT: f32 = 1.0 / 256.0;
+/// Per step of a tame material coefficient: ±1 for restitution (half of it refused),
+/// ±2 for friction.
+pub const RESTITUTION_UNIT: f32 = 1.0 / 32768.0;
+/// Per step of a tame friction coefficient: ±2.
+pub const FRICTION_UNIT: f32 = 1.0 / 16384.0;
+/// 1/s per step of a tame damping: ±8 /s (negative refused).
+pub const DAMPING_UNIT: f32 = 1.0 / 4096.0;
+/// N (or N·s, N·m) per step of a tame force, impulse or torque: ±2048.
+pub const FORCE_UNIT: f32 = 1.0 / 16.0;
+/// m/s² per step of tame gravity: ±128 m/s².
+pub const GRAVITY_UNIT: f32 = 1.0 / 256.0;
+/// Per step of a tame small configuration value (slop, margins, factors, sleep
+/// thresholds and times): ±8.
+pub const CONFIG_UNIT: f32 = 1.0 / 4096.0;
+/// m/s or rad/s per step of a tame speed limit or threshold: ±2048.
+pub const SPEED_UNIT: f32 = 1.0 / 16.0;
+/// Seconds per step of a tame time step: (0, 1] s.
+pub const DT_UNIT: f32 = 1.0 / 65536.0;
+/// Metres per step of a tame ray length: (0, 32] m.
+pub const RAY_UNIT: f32 = 1.0 / 2048.0;
+
+/// A shape for the world: sizes in [`SIZE_UNIT`], points in [`COORD_UNIT`].
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum WorldShapeInput {
+    /// A sphere.
+    Sphere {
+        /// Radius.
+        radius: Len,
+    },
+    /// A capsule.
+    Capsule {
+        /// Half the core segment's length.
+        half_height: Len,
+        /// Radius.
+        radius: Len,
+    },
+    /// A box.
+    Cuboid {
+        /// Half-extents.
+        half_extents: [Len; 3],
+    },
+    /// A hull from the first `count` points.
+    Hull {
+        /// The cloud.
+        points: [Vec3Input; MAX_HULL_POINTS],
+        /// Points used (clamped by carom).
+        count: u8,
+    },
+    /// A half-space.
+    HalfSpace {
+        /// Plane normal.
+        normal: Vec3Input,
+    },
+    /// A triangle.
+    Triangle {
+        /// Corners.
+        corners: [Vec3Input; 3],
+    },
+}
+
+impl WorldShapeInput {
+    /// The plain-data shape.
+    pub fn spec(&self) -> ShapeSpec {
+        let len = |l: &Len| l.value(SIZE_UNIT);
+        match self {
+            WorldShapeInput::Sphere { radius } => ShapeSpec::Sphere {
+                radius: len(radius),
+            },
+            WorldShapeInput::Capsule {
+                half_height,
+                radius,
+            } => ShapeSpec::Capsule {
+                half_height: len(half_height),
+                radius: len(radius),
+            },
+            WorldShapeInput::Cuboid {
+                half_extents: [x, y, z],
+            } => ShapeSpec::Cuboid {
+                half_extents: Vec3::new(len(x), len(y), len(z)),
+            },
+            WorldShapeInput::Hull { points, count } => ShapeSpec::Hull {
+                points: points.map(|p| vec3(&p, COORD_UNIT)),
+                count: *count,
+            },
+            WorldShapeInput::HalfSpace { normal } => ShapeSpec::HalfSpace {
+                normal: vec3(normal, COORD_UNIT),
+            },
+            WorldShapeInput::Triangle { corners } => ShapeSpec::Triangle {
+                corners: corners.map(|p| vec3(&p, COORD_UNIT)),
+            },
+        }
+    }
+}
+
+/// A body kind.
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum KindInput {
+    /// Dynamic.
+    Dynamic,
+    /// Static.
+    Static,
+    /// Kinematic.
+    Kinematic,
+}
+
+/// A mass specification: density in [`DENSITY_UNIT`] or mass in [`MASS_UNIT`].
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum MassInput {
+    /// `MassSpec::Density`.
+    Density(Len),
+    /// `MassSpec::Mass`.
+    Mass(Len),
+}
+
+/// A material: restitution in [`RESTITUTION_UNIT`], frictions in [`FRICTION_UNIT`].
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub struct MaterialInput {
+    /// Restitution.
+    pub restitution: Num,
+    /// Static friction.
+    pub static_friction: Num,
+    /// Kinetic friction.
+    pub kinetic_friction: Num,
+}
+
+impl MaterialInput {
+    /// The material.
+    pub fn material(&self) -> Material {
+        Material {
+            restitution: self.restitution.value(RESTITUTION_UNIT),
+            static_friction: self.static_friction.value(FRICTION_UNIT),
+            kinetic_friction: self.kinetic_friction.value(FRICTION_UNIT),
+        }
+    }
+}
+
+/// A body description.
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub struct BodyInput {
+    /// Kind.
+    pub kind: KindInput,
+    /// Shape.
+    pub shape: WorldShapeInput,
+    /// Pose.
+    pub pose: PoseInput,
+    /// Linear velocity ([`LINEAR_UNIT`]).
+    pub linear: Vec3Input,
+    /// Angular velocity ([`ANGULAR_UNIT`]).
+    pub angular: Vec3Input,
+    /// Mass or density.
+    pub mass: MassInput,
+    /// Material.
+    pub material: MaterialInput,
+    /// Linear and angular damping ([`DAMPING_UNIT`]).
+    pub damping: [Num; 2],
+    /// Collision group and mask bits: `None` for the defaults (1, all).
+    pub filter: Option<(u32, u32)>,
+    /// Sensor flag.
+    pub sensor: bool,
+    /// Continuous collision flag.
+    pub ccd: bool,
+    /// User data.
+    pub user_data: u64,
+}
+
+impl BodyInput {
+    /// The plain-data description.
+    pub fn spec(&self) -> BodySpec {
+        let (group, mask) = self.filter.unwrap_or((1, u32::MAX));
+        BodySpec {
+            kind: match self.kind {
+                KindInput::Dynamic => BodyKind::Dynamic,
+                KindInput::Static => BodyKind::Static,
+                KindInput::Kinematic => BodyKind::Kinematic,
+            },
+            shape: self.shape.spec(),
+            position: vec3(&self.pose.position, COORD_UNIT),
+            rotation: self.pose.rotation.quat(),
+            linear_velocity: vec3(&self.linear, LINEAR_UNIT),
+            angular_velocity: vec3(&self.angular, ANGULAR_UNIT),
+            mass: match self.mass {
+                MassInput::Density(d) => MassSpec::Density(d.value(DENSITY_UNIT)),
+                MassInput::Mass(m) => MassSpec::Mass(m.value(MASS_UNIT)),
+            },
+            material: self.material.material(),
+            linear_damping: self.damping[0].value(DAMPING_UNIT),
+            angular_damping: self.damping[1].value(DAMPING_UNIT),
+            group,
+            mask,
+            sensor: self.sensor,
+            ccd: self.ccd,
+            user_data: self.user_data,
+        }
+    }
+}
+
+/// A handle: one `add` returned, or anything.
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum HandleInput {
+    /// The `k`-th created handle (modulo their number).
+    Created(u8),
+    /// A handle near the real ones: a small slot and generation.
+    Near {
+        /// Slot.
+        index: u8,
+        /// Generation.
+        generation: u8,
+    },
+    /// Any bits.
+    Raw {
+        /// Slot.
+        index: u32,
+        /// Generation.
+        generation: u32,
+    },
+}
+
+impl HandleInput {
+    /// The handle reference.
+    pub fn handle(&self) -> HandleRef {
+        match *self {
+            HandleInput::Created(k) => HandleRef::Created(k),
+            HandleInput::Near { index, generation } => HandleRef::Raw(BodyHandle {
+                index: u32::from(index % 20),
+                generation: u32::from(generation % 4),
+            }),
+            HandleInput::Raw { index, generation } => {
+                HandleRef::Raw(BodyHandle { index, generation })
+            }
+        }
+    }
+}
+
+/// One change to the default configuration.
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum ConfigEdit {
+    /// Gravity ([`GRAVITY_UNIT`]).
+    Gravity(Vec3Input),
+    /// Time step ([`DT_UNIT`]).
+    Dt(Len),
+    /// Sub-steps.
+    Substeps(u8),
+    /// Velocity iterations.
+    VelocityIterations(u16),
+    /// Position iterations.
+    PositionIterations(u16),
+    /// Restitution threshold ([`SPEED_UNIT`]).
+    RestitutionThreshold(Num),
+    /// Slop ([`CONFIG_UNIT`]).
+    Slop(Num),
+    /// Projection factor ([`CONFIG_UNIT`]).
+    ProjectionFactor(Num),
+    /// Largest projection ([`CONFIG_UNIT`]).
+    MaxProjection(Num),
+    /// Speculative margin ([`CONFIG_UNIT`]).
+    SpeculativeMargin(Num),
+    /// Stick speed ([`CONFIG_UNIT`]).
+    StickSpeed(Num),
+    /// Sleep speeds, linear and angular ([`CONFIG_UNIT`]).
+    SleepSpeeds(Num, Num),
+    /// Sleep time ([`CONFIG_UNIT`]).
+    SleepTime(Num),
+    /// Sleep on or off.
+    SleepEnabled(bool),
+    /// CCD motion fraction ([`CONFIG_UNIT`]).
+    CcdMotionFraction(Num),
+    /// Hit event speed ([`SPEED_UNIT`]).
+    HitEventSpeed(Num),
+    /// Speed limits, linear and angular ([`SPEED_UNIT`]).
+    SpeedLimits(Num, Num),
+}
+
+/// The default configuration with `edits` applied in order.
+pub fn config(edits: &[ConfigEdit]) -> WorldConfig {
+    let mut c = WorldConfig::DEFAULT;
+    for e in edits {
+        match *e {
+            ConfigEdit::Gravity(g) => c.gravity = vec3(&g, GRAVITY_UNIT),
+            ConfigEdit::Dt(dt) => c.dt = dt.value(DT_UNIT),
+            ConfigEdit::Substeps(n) => c.substeps = u32::from(n),
+            ConfigEdit::VelocityIterations(n) => c.velocity_iterations = u32::from(n),
+            ConfigEdit::PositionIterations(n) => c.position_iterations = u32::from(n),
+            ConfigEdit::RestitutionThreshold(x) => c.restitution_threshold = x.value(SPEED_UNIT),
+            ConfigEdit::Slop(x) => c.slop = x.value(CONFIG_UNIT),
+            ConfigEdit::ProjectionFactor(x) => c.projection_factor = x.value(CONFIG_UNIT),
+            ConfigEdit::MaxProjection(x) => c.max_projection = x.value(CONFIG_UNIT),
+            ConfigEdit::SpeculativeMargin(x) => c.speculative_margin = x.value(CONFIG_UNIT),
+            ConfigEdit::StickSpeed(x) => c.stick_speed = x.value(CONFIG_UNIT),
+            ConfigEdit::SleepSpeeds(l, a) => {
+                c.sleep_linear_speed = l.value(CONFIG_UNIT);
+                c.sleep_angular_speed = a.value(CONFIG_UNIT);
+            }
+            ConfigEdit::SleepTime(x) => c.sleep_time = x.value(CONFIG_UNIT),
+            ConfigEdit::SleepEnabled(on) => c.sleep_enabled = on,
+            ConfigEdit::CcdMotionFraction(x) => c.ccd_motion_fraction = x.value(CONFIG_UNIT),
+            ConfigEdit::HitEventSpeed(x) => c.hit_event_speed = x.value(SPEED_UNIT),
+            ConfigEdit::SpeedLimits(l, a) => {
+                c.max_linear_speed = l.value(SPEED_UNIT);
+                c.max_angular_speed = a.value(SPEED_UNIT);
+            }
+        }
+    }
+    c
+}
+
+/// A query filter: `None` sees everything.
+pub type FilterInput = Option<(u32, u32, bool)>;
+
+fn filter(f: &FilterInput) -> QueryFilter {
+    match *f {
+        None => QueryFilter::ALL,
+        Some((group, mask, include_sensors)) => QueryFilter {
+            group,
+            mask,
+            include_sensors,
+        },
+    }
+}
+
+/// One call on the world (see `carom::props::WorldOp`).
+#[derive(Arbitrary, Clone, Debug)]
+pub enum OpInput {
+    /// Add a body.
+    Add(BodyInput),
+    /// Remove a body.
+    Remove(HandleInput),
+    /// Teleport (position [`COORD_UNIT`]).
+    SetPose(HandleInput, PoseInput),
+    /// Set the linear velocity ([`LINEAR_UNIT`]).
+    SetVelocity(HandleInput, Vec3Input),
+    /// Set the angular velocity ([`ANGULAR_UNIT`]).
+    SetAngularVelocity(HandleInput, Vec3Input),
+    /// Add a force ([`FORCE_UNIT`]).
+    ApplyForce(HandleInput, Vec3Input),
+    /// Add a torque ([`FORCE_UNIT`]).
+    ApplyTorque(HandleInput, Vec3Input),
+    /// Apply an impulse ([`FORCE_UNIT`]) at a point ([`COORD_UNIT`]).
+    ApplyImpulseAt(HandleInput, Vec3Input, Vec3Input),
+    /// Wake a body.
+    Wake(HandleInput),
+    /// Put a body to sleep.
+    Sleep(HandleInput),
+    /// Change a material.
+    SetMaterial(HandleInput, MaterialInput),
+    /// Replace the configuration with the default plus edits.
+    SetConfig(Vec<ConfigEdit>),
+    /// Step `n` times.
+    Step(u8),
+    /// Cast a ray: origin ([`COORD_UNIT`]), raw direction ([`COORD_UNIT`]; `None` for
+    /// the unit direction along it), length ([`RAY_UNIT`]).
+    CastRay {
+        /// Origin.
+        origin: Vec3Input,
+        /// Direction.
+        direction: Vec3Input,
+        /// Use the direction as given (usually not unit) instead of normalising it.
+        raw_direction: bool,
+        /// Length.
+        max_t: Num,
+        /// Filter.
+        filter: FilterInput,
+    },
+    /// Overlap query.
+    Overlap {
+        /// Shape.
+        shape: WorldShapeInput,
+        /// Pose.
+        pose: PoseInput,
+        /// Filter.
+        filter: FilterInput,
+    },
+    /// Snapshot and restore.
+    SnapshotRestore,
+    /// Restore a damaged snapshot.
+    CorruptRestore {
+        /// Offset.
+        at: u32,
+        /// XOR mask.
+        xor: u8,
+        /// Truncate instead.
+        truncate: bool,
+    },
+    /// Checksums.
+    Checksum,
+}
+
+impl OpInput {
+    /// The plain-data operation.
+    pub fn op(&self) -> WorldOp {
+        match self {
+            OpInput::Add(b) => WorldOp::Add(b.spec()),
+            OpInput::Remove(h) => WorldOp::Remove(h.handle()),
+            OpInput::SetPose(h, p) => {
+                WorldOp::SetPose(h.handle(), vec3(&p.position, COORD_UNIT), p.rotation.quat())
+            }
+            OpInput::SetVelocity(h, v) => WorldOp::SetVelocity(h.handle(), vec3(v, LINEAR_UNIT)),
+            OpInput::SetAngularVelocity(h, v) => {
+                WorldOp::SetAngularVelocity(h.handle(), vec3(v, ANGULAR_UNIT))
+            }
+            OpInput::ApplyForce(h, f) => WorldOp::ApplyForce(h.handle(), vec3(f, FORCE_UNIT)),
+            OpInput::ApplyTorque(h, t) => WorldOp::ApplyTorque(h.handle(), vec3(t, FORCE_UNIT)),
+            OpInput::ApplyImpulseAt(h, j, p) => {
+                WorldOp::ApplyImpulseAt(h.handle(), vec3(j, FORCE_UNIT), vec3(p, COORD_UNIT))
+            }
+            OpInput::Wake(h) => WorldOp::Wake(h.handle()),
+            OpInput::Sleep(h) => WorldOp::Sleep(h.handle()),
+            OpInput::SetMaterial(h, m) => WorldOp::SetMaterial(h.handle(), m.material()),
+            OpInput::SetConfig(edits) => WorldOp::SetConfig(config(edits)),
+            OpInput::Step(n) => WorldOp::Step(*n),
+            OpInput::CastRay {
+                origin,
+                direction,
+                raw_direction,
+                max_t,
+                filter: f,
+            } => {
+                let d = vec3(direction, COORD_UNIT);
+                WorldOp::CastRay {
+                    origin: vec3(origin, COORD_UNIT),
+                    direction: if *raw_direction {
+                        d
+                    } else {
+                        d.normalize_or(Vec3::Y)
+                    },
+                    max_t: max_t.value(RAY_UNIT),
+                    filter: filter(f),
+                }
+            }
+            OpInput::Overlap {
+                shape,
+                pose,
+                filter: f,
+            } => WorldOp::Overlap {
+                shape: shape.spec(),
+                position: vec3(&pose.position, COORD_UNIT),
+                rotation: pose.rotation.quat(),
+                filter: filter(f),
+            },
+            OpInput::SnapshotRestore => WorldOp::SnapshotRestore,
+            OpInput::CorruptRestore { at, xor, truncate } => WorldOp::CorruptRestore {
+                at: *at,
+                xor: *xor,
+                truncate: *truncate,
+            },
+            OpInput::Checksum => WorldOp::Checksum,
+        }
+    }
+}
+
+/// The operations of a `world` input.
+pub fn world_ops(ops: &[OpInput]) -> Vec<WorldOp> {
+    ops.iter().map(OpInput::op).collect()
+}
+
+/// Float bit patterns worth writing over a snapshot field.
+pub const SPECIAL_FLOATS: [f32; 12] = [
+    f32::NAN,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    0.0,
+    -0.0,
+    -1.0,
+    2.0,
+    1.0e-3,
+    1.0e30,
+    -3.4e38,
+    1.0e-40,
+    f32::MIN_POSITIVE,
+];
+
+/// One edit of a real snapshot (see `carom::props::SnapshotEdit`).
+#[derive(Arbitrary, Clone, Copy, Debug)]
+pub enum EditInput {
+    /// XOR a byte.
+    Xor {
+        /// Offset.
+        at: u32,
+        /// Mask.
+        mask: u8,
+    },
+    /// Write 4 bytes.
+    Word {
+        /// Offset.
+        at: u32,
+        /// Bits.
+        bits: u32,
+    },
+    /// Write one of [`SPECIAL_FLOATS`].
+    Special {
+        /// Offset.
+        at: u32,
+        /// Which (modulo the table).
+        which: u8,
+    },
+    /// Truncate.
+    Truncate {
+        /// New length.
+        len: u32,
+    },
+    /// Remove a byte.
+    Delete {
+        /// Offset.
+        at: u32,
+    },
+    /// Insert a byte.
+    Insert {
+        /// Offset.
+        at: u32,
+        /// Byte.
+        byte: u8,
+    },
+}
+
+impl EditInput {
+    /// The edit.
+    pub fn edit(&self) -> SnapshotEdit {
+        match *self {
+            EditInput::Xor { at, mask } => SnapshotEdit::Xor { at, mask },
+            EditInput::Word { at, bits } => SnapshotEdit::Word { at, bits },
+            EditInput::Special { at, which } => SnapshotEdit::Word {
+                at,
+                bits: SPECIAL_FLOATS[which as usize % SPECIAL_FLOATS.len()].to_bits(),
+            },
+            EditInput::Truncate { len } => SnapshotEdit::Truncate { len },
+            EditInput::Delete { at } => SnapshotEdit::Delete { at },
+            EditInput::Insert { at, byte } => SnapshotEdit::Insert { at, byte },
+        }
+    }
+}
+
+/// Input of the `snapshot` target.
+#[derive(Arbitrary, Clone, Debug)]
+pub enum SnapshotInput {
+    /// Arbitrary bytes restored into the fixture after `steps` steps.
+    Bytes {
+        /// Fixture steps.
+        steps: u8,
+        /// The buffer.
+        bytes: Vec<u8>,
+    },
+    /// A real snapshot of the fixture after `steps` steps, edited; `reseal` recomputes the
+    /// header's payload hash so the field checks are reached.
+    Edited {
+        /// Fixture steps.
+        steps: u8,
+        /// The edits.
+        edits: Vec<EditInput>,
+        /// Recompute the payload hash.
+        reseal: bool,
+    },
+}

@@ -6,11 +6,13 @@ mod hull;
 mod manifold;
 mod narrow;
 mod toi;
+mod world;
 
 pub use hull::*;
 pub use manifold::*;
 pub use narrow::*;
 pub use toi::*;
+pub use world::*;
 
 /// A broken property: which one, as a static message.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
