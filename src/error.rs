@@ -175,6 +175,20 @@ pub(crate) fn non_negative(x: f32, what: Input) -> Result<f32, Error> {
     }
 }
 
+/// Largest coordinate (m) a position given at the API may have. `f32` keeps about 1 mm
+/// of resolution at 10 km; further out the tolerances (slop, margins) stop making sense.
+pub const MAX_COORDINATE: f32 = 1.0e4;
+
+/// Check a position: finite, and every coordinate within ±[`MAX_COORDINATE`].
+pub(crate) fn position(v: crate::math::Vec3) -> Result<crate::math::Vec3, Error> {
+    finite_vec(v, Input::Position)?;
+    if v.abs().max_elem() <= MAX_COORDINATE {
+        Ok(v)
+    } else {
+        Err(Error::OutOfRange(Input::Position))
+    }
+}
+
 /// Check that a vector is finite.
 pub(crate) fn finite_vec(v: crate::math::Vec3, what: Input) -> Result<crate::math::Vec3, Error> {
     if v.is_finite() {

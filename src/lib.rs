@@ -61,7 +61,7 @@ pub use dynamics::query::{QueryFilter, RayCastHit};
 pub use dynamics::snapshot::RestoreSeed;
 pub use dynamics::snapshot::{Stage, StepTrace};
 pub use dynamics::BodyHandle;
-pub use error::{Error, HullError, Input, Pool, SnapshotError};
+pub use error::{Error, HullError, Input, Pool, SnapshotError, MAX_COORDINATE};
 pub use math::{Aabb, Iso, Mat3, Quat, Vec3};
 pub use shape::{ConvexHull, Ray, Shape};
 pub use world::{BodyRef, World};

@@ -202,6 +202,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     pub fn remove(&mut self, h: BodyHandle) -> Result<(), Error> {
         self.bodies.remove(h).ok_or(Error::StaleHandle)?;
         self.contacts.retain(|c| c.a != h.index && c.b != h.index);
+        self.broad.order.retain(|s| *s != h.index);
         Ok(())
     }
 
@@ -256,12 +257,17 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         Ok(())
     }
 
-    /// Add a force (N) at the centre of mass for the next step; wakes the body.
+    /// Add a force (N) at the centre of mass for the next step; wakes the body. Fails with
+    /// `OutOfRange(Force)` if the accumulated force would overflow `f32`.
     pub fn apply_force(&mut self, h: BodyHandle, f: Vec3) -> Result<(), Error> {
         finite_vec(f, Input::Force)?;
         let b = self.body_mut(h)?;
         if b.is_dynamic() {
-            b.force += f;
+            let total = b.force + f;
+            if !total.is_finite() {
+                return Err(Error::OutOfRange(Input::Force));
+            }
+            b.force = total;
             wake(b);
         }
         Ok(())
@@ -272,13 +278,18 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         finite_vec(t, Input::Force)?;
         let b = self.body_mut(h)?;
         if b.is_dynamic() {
-            b.torque += t;
+            let total = b.torque + t;
+            if !total.is_finite() {
+                return Err(Error::OutOfRange(Input::Force));
+            }
+            b.torque = total;
             wake(b);
         }
         Ok(())
     }
 
-    /// Apply an impulse (N·s) at a world point now; wakes the body.
+    /// Apply an impulse (N·s) at a world point now; wakes the body. Fails with
+    /// `OutOfRange(Force)` if the resulting velocity would overflow `f32`.
     pub fn apply_impulse_at(
         &mut self,
         h: BodyHandle,
@@ -286,10 +297,15 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         point: Vec3,
     ) -> Result<(), Error> {
         finite_vec(impulse, Input::Force)?;
-        finite_vec(point, Input::Position)?;
+        crate::error::position(point)?;
         let b = self.body_mut(h)?;
         if b.is_dynamic() {
-            b.apply_impulse_at(impulse, point);
+            let mut after = *b;
+            after.apply_impulse_at(impulse, point);
+            if !(after.linear_velocity.is_finite() && after.angular_velocity.is_finite()) {
+                return Err(Error::OutOfRange(Input::Force));
+            }
+            *b = after;
             wake(b);
         }
         Ok(())

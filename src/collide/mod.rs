@@ -31,11 +31,10 @@ use crate::error::{Error, Input};
 use crate::math::Iso;
 use crate::shape::Shape;
 
-/// Check a pose given at a public door: finite position, finite unit rotation.
+/// Check a pose given at a public door: a finite position within
+/// ±[`crate::error::MAX_COORDINATE`], a finite unit rotation.
 pub(crate) fn check_pose(pose: &Iso) -> Result<(), Error> {
-    if !pose.position.is_finite() {
-        return Err(Error::NonFinite(Input::Position));
-    }
+    crate::error::position(pose.position)?;
     if !pose.rotation.is_finite() {
         return Err(Error::NonFinite(Input::Rotation));
     }

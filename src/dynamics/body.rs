@@ -266,7 +266,7 @@ pub(crate) struct Body<'a> {
 impl<'a> Body<'a> {
     /// Validate a description and derive mass properties.
     pub fn from_desc(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
-        finite_vec(d.pose.position, Input::Position)?;
+        crate::error::position(d.pose.position)?;
         if !d.pose.rotation.is_finite() {
             return Err(Error::NonFinite(Input::Rotation));
         }
@@ -386,16 +386,19 @@ impl<'a> Body<'a> {
     /// Stage 1: `v += dt (g + F/m)`, `ω += dt I⁻¹ τ`, then damping `v /= 1 + dt c`,
     /// then the speed limits. Forces are cleared afterwards.
     pub fn integrate_velocity(&mut self, cfg: &WorldConfig, dt: f32) {
-        if !self.is_dynamic() || !self.awake {
+        if self.kind == BodyKind::Static || !self.awake {
             self.force = Vec3::ZERO;
             self.torque = Vec3::ZERO;
             return;
         }
-        let a = cfg.gravity + self.force * self.inv_mass;
-        self.linear_velocity += a * dt;
-        self.angular_velocity += self.inv_inertia_world.mul_vec(self.torque) * dt;
-        self.linear_velocity *= 1.0 / (1.0 + dt * self.linear_damping);
-        self.angular_velocity *= 1.0 / (1.0 + dt * self.angular_damping);
+        if self.is_dynamic() {
+            let a = cfg.gravity + self.force * self.inv_mass;
+            self.linear_velocity += a * dt;
+            self.angular_velocity += self.inv_inertia_world.mul_vec(self.torque) * dt;
+            self.linear_velocity *= 1.0 / (1.0 + dt * self.linear_damping);
+            self.angular_velocity *= 1.0 / (1.0 + dt * self.angular_damping);
+        }
+        // Speed limits for dynamic and kinematic bodies alike.
         self.linear_velocity = clamp_length(self.linear_velocity, cfg.max_linear_speed);
         self.angular_velocity = clamp_length(self.angular_velocity, cfg.max_angular_speed);
         self.force = Vec3::ZERO;
@@ -421,9 +424,16 @@ impl<'a> Body<'a> {
     }
 }
 
-/// `v` shortened to at most `max` (m/s or rad/s).
+/// `v` shortened to at most `max` (m/s or rad/s). A vector too large to square in `f32`
+/// is first scaled down by its largest component; one that overflowed to infinity (a
+/// force beyond `f32`) stops: zero is the documented answer.
 #[inline]
 fn clamp_length(v: Vec3, max: f32) -> Vec3 {
+    if !v.is_finite() {
+        return Vec3::ZERO;
+    }
+    let big = v.abs().max_elem();
+    let v = if big > max { v * (max / big) } else { v };
     let l2 = v.length_squared();
     if l2 > max * max {
         v * (max / scalar::sqrt(l2))

@@ -124,6 +124,18 @@ impl<T: Copy, const N: usize> Pool<T, N> {
         })
     }
 
+    /// One past the highest slot that is used or has a non-zero generation: the slots a
+    /// snapshot must carry so handles stay the same after a restore.
+    pub fn touched(&self) -> usize {
+        let mut n = self.high as usize;
+        for (i, g) in self.generations.iter().enumerate().skip(n) {
+            if *g != 0 {
+                n = i + 1;
+            }
+        }
+        n
+    }
+
     /// Generation of slot `i` (0 when out of range).
     #[inline]
     pub fn generation(&self, i: usize) -> u32 {

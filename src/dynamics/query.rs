@@ -216,7 +216,7 @@ impl<'a, const B: usize, const C: usize, const E: usize> World<'a, B, C, E> {
 /// The input checks of the ray casts (see [`World::cast_ray`]).
 fn check_ray(ray: &Ray, max_t: f32) -> Result<(), Error> {
     non_negative(max_t, Input::Distance)?;
-    finite_vec(ray.origin, Input::Position)?;
+    crate::error::position(ray.origin)?;
     finite_vec(ray.direction, Input::Direction)?;
     let d2 = ray.direction.length_squared();
     if d2 == 0.0 {

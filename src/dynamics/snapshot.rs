@@ -261,7 +261,14 @@ fn get_shape<'a>(
         }
         2 => Shape::Cuboid(Cuboid::new(r.vec3()?).map_err(bad)?),
         3 => Shape::Hull(hulls(r.u64()?).ok_or(SnapshotError::MissingHull)?),
-        4 => Shape::HalfSpace(HalfSpace::new(r.vec3()?).map_err(bad)?),
+        4 => {
+            // Stored already normalised: keep the bits (normalising again may change them).
+            let normal = r.vec3()?;
+            if crate::math::scalar::abs(normal.length_squared() - 1.0) > 1.0e-3 {
+                return Err(SnapshotError::Corrupt);
+            }
+            Shape::HalfSpace(HalfSpace { normal })
+        }
         5 => {
             let (a, b, c) = (r.vec3()?, r.vec3()?, r.vec3()?);
             Shape::Triangle(Triangle::new(a, b, c).map_err(bad)?)
@@ -358,7 +365,6 @@ fn put_body(s: &mut impl Sink, b: &Body<'_>) {
     s.vec3(b.torque);
     s.f32(b.inv_mass);
     s.mat3(&b.inv_inertia_local);
-    s.mat3(&b.inv_inertia_world);
     put_material(s, &b.material);
     s.f32(b.linear_damping);
     s.f32(b.angular_damping);
@@ -382,7 +388,7 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
         2 => BodyKind::Kinematic,
         _ => return Err(SnapshotError::Corrupt),
     };
-    Ok(Body {
+    let mut b = Body {
         shape,
         kind,
         pose: r.iso()?,
@@ -393,7 +399,7 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
         torque: r.vec3()?,
         inv_mass: r.f32()?,
         inv_inertia_local: r.mat3()?,
-        inv_inertia_world: r.mat3()?,
+        inv_inertia_world: Mat3::ZERO,
         material: get_material(r)?,
         linear_damping: r.f32()?,
         angular_damping: r.f32()?,
@@ -406,7 +412,61 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
         user_data: r.u64()?,
         pose0: r.iso()?,
         bounds: Aabb::new(r.vec3()?, r.vec3()?),
-    })
+    };
+    check_body(&b)?;
+    // Derived, never stored: `R I⁻¹ Rᵀ` from the rotation, exactly as the step computes it.
+    b.update_inertia();
+    Ok(b)
+}
+
+/// Largest coordinate (m) a restored body may have. The API
+/// accepts positions within ±`MAX_COORDINATE` (10 km) and the step clamps speeds to
+/// `max_linear_speed`, so a simulated body passes 1e10 m only after months of falling;
+/// squares of such values still fit in `f32`, which a crafted 1e37 would not. (Speeds
+/// need no bound: the step clamps them before they are used.)
+pub const MAX_STATE_MAGNITUDE: f32 = 1.0e10;
+
+/// What a body read from a snapshot must satisfy to be a state the API could produce:
+/// static shapes on static bodies only, an inverse mass that is positive exactly for
+/// dynamic bodies, an inverse inertia that is symmetric positive semi-definite (checked
+/// on its diagonal and 2×2 minors), a centre of mass inside the shape, non-negative
+/// damping and sleep timer, and a static body at rest.
+fn check_body(b: &Body<'_>) -> R<()> {
+    let ok = |c: bool| {
+        if c {
+            Ok(())
+        } else {
+            Err(SnapshotError::Corrupt)
+        }
+    };
+    let m = &b.inv_inertia_local;
+    let d = m.diagonal();
+    match b.kind {
+        BodyKind::Dynamic => {
+            ok(!b.shape.is_static_only())?;
+            ok(b.inv_mass > 0.0)?;
+            ok(d.x >= 0.0 && d.y >= 0.0 && d.z >= 0.0)?;
+            ok(m.x.y == m.y.x && m.x.z == m.z.x && m.y.z == m.z.y)?;
+            ok(m.x.y * m.x.y <= d.x * d.y
+                && m.x.z * m.x.z <= d.x * d.z
+                && m.y.z * m.y.z <= d.y * d.z)?;
+            // The centre of mass lies inside the shape.
+            let reach = b.shape.bounding_radius();
+            ok(b.center_local.length() <= reach + reach * 1.0e-4)?;
+        }
+        BodyKind::Static | BodyKind::Kinematic => {
+            ok(b.inv_mass == 0.0 && m.max_abs() == 0.0 && b.center_local == Vec3::ZERO)?;
+        }
+    }
+    if b.kind == BodyKind::Static {
+        ok(b.linear_velocity == Vec3::ZERO && b.angular_velocity == Vec3::ZERO)?;
+    }
+    ok(b.linear_damping >= 0.0 && b.angular_damping >= 0.0 && b.sleep_time >= 0.0)?;
+    // Positions and speeds a simulation can reach (see `MAX_STATE_MAGNITUDE`).
+    let small = |v: Vec3| v.abs().max_elem() <= MAX_STATE_MAGNITUDE;
+    ok(small(b.pose.position) && small(b.pose0.position))?;
+    ok(small(b.bounds.min) && small(b.bounds.max))?;
+    ok(b.bounds.is_valid())
 }
 
 fn put_point(s: &mut impl Sink, p: &ContactPoint) {
@@ -513,8 +573,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     fn put_payload(&self, s: &mut impl Sink) {
         put_config(s, &self.config);
         s.u64(self.step_count);
-        s.u32(self.bodies.high() as u32);
-        for i in 0..self.bodies.high() {
+        s.u32(self.bodies.touched() as u32);
+        for i in 0..self.bodies.touched() {
             s.u32(self.bodies.generation(i));
             match self.bodies.at(i) {
                 Some(b) => {
@@ -563,7 +623,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         HEADER_LEN
             + config.0
             + 8 // step counter
-            + 4 + BODIES * (4 + 1 + body.0) // slots
+            + 4 + BODIES * (4 + 1 + body.0) // slots: generation, used flag, body
             + 4 + BODIES * 4 // broad-phase order
             + 4 + CONTACTS * contact.0
     }
@@ -674,11 +734,17 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         if apply {
             self.broad.order.clear();
         }
+        // The order must be a permutation of live slots: each at most once.
+        let mut seen = [false; BODIES];
         for _ in 0..n_order {
-            let slot = r.u32()?;
-            if !live.get(slot as usize).copied().unwrap_or(false) {
+            let slot = r.u32()? as usize;
+            let fresh = seen
+                .get_mut(slot)
+                .is_some_and(|s| !core::mem::replace(s, true));
+            if !live.get(slot).copied().unwrap_or(false) || !fresh {
                 return Err(SnapshotError::Corrupt);
             }
+            let slot = slot as u32;
             if apply && self.broad.order.push(slot).is_err() {
                 return Err(SnapshotError::Corrupt);
             }

@@ -70,27 +70,16 @@ pub const WORLD_MIN_MASS: f32 = 1.0e-3;
 /// Largest time step (s) in the working range.
 pub const WORLD_MAX_DT: f32 = 1.0;
 
-/// Violations these properties report today that are known findings in the engine, each
-/// with an ignored regression test in `tests/world_fuzz.rs` (`finding_*`). The seeded
-/// tests and the fuzz targets count an input that hits one of them instead of failing,
-/// so they keep finding new problems; delete a line when its finding is fixed.
-pub const KNOWN_FINDINGS: [&str; 5] = [
-    // `World::remove` leaves the slot in the broad-phase order until the next step; a
-    // snapshot taken in between is refused by `restore` as corrupt.
-    "restore: refused the world's own snapshot",
-    // Snapshots keep slot generations only up to the highest used slot, so after a
-    // restore a freed slot above it hands out an old handle again.
-    "restore: the next body gets another handle than in the clone (lost generations)",
-    // `restore` rebuilds a half-space through `HalfSpace::new`, which normalises the
-    // stored (already unit) normal again and may change its last bit.
-    "restore: snapshot after restore differs from the one restored",
-    // `restore` takes the inverse mass, inverse inertia and centre of mass from the
-    // buffer without checking them, so a resealed buffer with absurd values steps to NaN.
-    "restore: an accepted state in the working range went non-finite when stepped",
-    // `restore` checks that each broad-phase order entry is a live slot but not that the
-    // order is a permutation: a duplicated slot pairs a body with itself.
-    "restore: an accepted state steps to an inconsistent report or events",
-];
+/// True for a position the API accepts: finite, within ±[`crate::MAX_COORDINATE`].
+fn position_ok(v: Vec3) -> bool {
+    v.is_finite() && v.abs().max_elem() <= crate::MAX_COORDINATE
+}
+
+/// Violations these properties report today that are known, unfixed findings in the
+/// engine, each with an ignored regression test in `tests/world_fuzz.rs`. The seeded
+/// tests and the fuzz targets count an input that hits one instead of failing, so they
+/// keep finding new problems. Empty: every finding so far is fixed (`finding_*` tests).
+pub const KNOWN_FINDINGS: [&str; 0] = [];
 
 /// True when `v` is one of the [`KNOWN_FINDINGS`].
 pub fn is_known_finding(v: &Violation) -> bool {
@@ -247,7 +236,7 @@ impl BodySpec {
             MassSpec::Density(x) | MassSpec::Mass(x) => x.is_finite() && x > 0.0,
         };
         let non_negative = |x: f32| x.is_finite() && x >= 0.0;
-        let good = self.position.is_finite()
+        let good = position_ok(self.position)
             && self.rotation.is_unit()
             && self.linear_velocity.is_finite()
             && self.angular_velocity.is_finite()
@@ -599,16 +588,19 @@ impl<'h> Run<'h> {
             }
             WorldOp::ApplyForce(r, f) => {
                 let h = self.resolve(r);
-                self.setter(h, f.is_finite(), |w| w.apply_force(h, f))
+                let huge = f.abs().max_elem() > WORLD_WORKING_RANGE;
+                self.setter_or_overflow(h, f.is_finite(), huge, |w| w.apply_force(h, f))
             }
             WorldOp::ApplyTorque(r, t) => {
                 let h = self.resolve(r);
-                self.setter(h, t.is_finite(), |w| w.apply_torque(h, t))
+                let huge = t.abs().max_elem() > WORLD_WORKING_RANGE;
+                self.setter_or_overflow(h, t.is_finite(), huge, |w| w.apply_torque(h, t))
             }
             WorldOp::ApplyImpulseAt(r, j, p) => {
                 let h = self.resolve(r);
-                let good = j.is_finite() && p.is_finite();
-                self.setter(h, good, |w| w.apply_impulse_at(h, j, p))
+                let good = j.is_finite() && position_ok(p);
+                let huge = j.abs().max_elem() > WORLD_WORKING_RANGE;
+                self.setter_or_overflow(h, good, huge, |w| w.apply_impulse_at(h, j, p))
             }
             WorldOp::Wake(r) => {
                 let h = self.resolve(r);
@@ -729,7 +721,7 @@ impl<'h> Run<'h> {
     }
 
     fn set_pose(&mut self, h: BodyHandle, p: Vec3, q: Quat) -> Result<(), Violation> {
-        let good = p.is_finite() && q.is_unit();
+        let good = position_ok(p) && q.is_unit();
         self.setter(h, good, |w| w.set_pose(h, Iso::new(p, q)))?;
         if let Ok(b) = self.world.body(h) {
             if good && b.kind() == BodyKind::Static {
@@ -758,6 +750,18 @@ impl<'h> Run<'h> {
         good: bool,
         f: impl FnOnce(&mut OpsWorld<'h>) -> Result<(), Error>,
     ) -> Result<(), Violation> {
+        self.setter_or_overflow(h, good, false, f)
+    }
+
+    /// [`Self::setter`] for a value that may also be refused with `OutOfRange` when it is
+    /// huge (`may_overflow`): a force or impulse whose result would overflow `f32`.
+    fn setter_or_overflow(
+        &mut self,
+        h: BodyHandle,
+        good: bool,
+        may_overflow: bool,
+        f: impl FnOnce(&mut OpsWorld<'h>) -> Result<(), Error>,
+    ) -> Result<(), Violation> {
         let live = self.model.is_live(h);
         let before = fingerprint(&self.world, Some(h));
         match f(&mut self.world) {
@@ -765,9 +769,10 @@ impl<'h> Run<'h> {
                 self.accepted = true;
                 check(live && good, "setter: accepted a stale handle or bad value")
             }
-            Err(_) => {
+            Err(e) => {
+                let overflow = may_overflow && matches!(e, Error::OutOfRange(_));
                 check(
-                    !(live && good),
+                    !(live && good) || overflow,
                     "setter: refused a live handle and good value",
                 )?;
                 check(
@@ -829,7 +834,7 @@ impl<'h> Run<'h> {
     ) -> Result<(), Violation> {
         let ray = Ray { origin, direction };
         let d2 = direction.length_squared();
-        let inputs_finite = origin.is_finite() && direction.is_finite() && max_t.is_finite();
+        let inputs_finite = position_ok(origin) && direction.is_finite() && max_t.is_finite();
         // The documented tolerance on |d|² is 1e-3; 1e-4 is clearly inside, 1e-2 clearly out.
         let clearly_good = inputs_finite && max_t >= 0.0 && scalar::abs(d2 - 1.0) <= 1.0e-4;
         let clearly_bad = !inputs_finite || max_t < 0.0 || scalar::abs(d2 - 1.0) > 1.0e-2;
@@ -911,7 +916,7 @@ impl<'h> Run<'h> {
                 Shape::hull(&hull)
             }
         };
-        let good = pose.position.is_finite() && pose.rotation.is_unit();
+        let good = position_ok(pose.position) && pose.rotation.is_unit();
         let mut out = [BodyHandle {
             index: u32::MAX,
             generation: u32::MAX,

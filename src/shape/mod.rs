@@ -189,7 +189,7 @@ impl Ray {
     /// A ray from an origin and a direction; the direction is normalised. Fails on
     /// non-finite input or a zero direction.
     pub fn new(origin: Vec3, direction: Vec3) -> Result<Ray, Error> {
-        finite_vec(origin, Input::Position)?;
+        crate::error::position(origin)?;
         finite_vec(direction, Input::Direction)?;
         let (d, _) = direction
             .normalize_and_length()
@@ -408,7 +408,7 @@ impl<'a> Shape<'a> {
     /// `max_t`.
     pub fn cast_ray(&self, pose: &Iso, ray: &Ray, max_t: f32) -> Result<Option<RayHit>, Error> {
         crate::error::non_negative(max_t, Input::Distance)?;
-        finite_vec(ray.origin, Input::Position)?;
+        crate::error::position(ray.origin)?;
         finite_vec(ray.direction, Input::Direction)?;
         if crate::math::scalar::abs(ray.direction.length_squared() - 1.0) > 1.0e-3 {
             return Err(Error::NotUnit(Input::Direction));

@@ -21,10 +21,14 @@ const MIN_AREA: f32 = 1.0e-12;
 const PARALLEL_COS: f32 = 1.0e-7;
 
 impl Triangle {
-    /// A triangle; vertices must be finite and not collinear.
+    /// A triangle; vertices must be finite, within ±[`crate::MAX_COORDINATE`] and not
+    /// collinear.
     pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Result<Triangle, Error> {
         for v in [a, b, c] {
             finite_vec(v, Input::Point)?;
+            if v.abs().max_elem() > crate::error::MAX_COORDINATE {
+                return Err(Error::OutOfRange(Input::Point));
+            }
         }
         let n = (b - a).cross(c - a);
         if 0.5 * n.length() <= MIN_AREA || n.length_squared().is_nan() {
