@@ -1,4 +1,5 @@
-//! Golden checksums: the reference scenes, run for their steps, must hash to the values in
+//! Golden checksums: the reference scenes, run for their steps, and the narrow-phase
+//! workload (`carom::scenes::narrow`) must hash to the values in
 //! `tests/golden/checksums.txt` — in debug and in release, and (through `.ci/run`) on
 //! Cortex-M under QEMU and on wasm32 under Node, which print the same lines.
 //!
@@ -23,7 +24,7 @@ fn reference_hulls() -> Vec<ConvexHull> {
 }
 
 fn line(scene: Scene, sum: u64) -> String {
-    format!("{} {} {:#018x}", scene.name(), scene.steps(), sum)
+    scene.line(sum).to_string()
 }
 
 fn reference_line(scene: Scene) -> String {
@@ -61,12 +62,14 @@ fn bless() -> bool {
 }
 
 #[test]
-fn reference_scenes_match_the_golden_checksums() {
+fn the_reference_scenes_and_the_narrow_workload_match_the_golden_checksums() {
     let lines: Vec<String> = run_on_big_stack(|| {
-        Scene::REFERENCE
+        let mut lines: Vec<String> = Scene::REFERENCE
             .iter()
             .map(|s| reference_line(*s))
-            .collect()
+            .collect();
+        lines.push(scenes::narrow::run().to_string());
+        lines
     });
     if bless() {
         std::fs::write(GOLDEN, lines.join("\n") + "\n").unwrap();
@@ -104,6 +107,30 @@ fn the_host_snapshot_is_byte_identical_and_continues_to_the_golden_checksum() {
         golden.lines().any(|l| l == finished),
         "{finished} not in the golden file"
     );
+}
+
+#[test]
+fn golden_lines_have_the_documented_format() {
+    // `<name> <steps> 0x<16 lower-case hex digits>`: the format every target prints and
+    // `.ci/run` diffs, so a formatting change on one side would fail CI, not pass silently.
+    let l = Scene::Tower.line(0x00ab_cdef_0123_4567).to_string();
+    assert_eq!(l, "tower 1000 0x00abcdef01234567");
+    let n = scenes::narrow::NarrowResult {
+        count: 256,
+        hash: 1,
+    }
+    .to_string();
+    assert_eq!(n, "narrow 256 0x0000000000000001");
+    let golden = std::fs::read_to_string(GOLDEN).unwrap();
+    let names: Vec<&str> = golden.lines().filter_map(|l| l.split(' ').next()).collect();
+    assert_eq!(names, ["mixed", "bullets", "tower", "narrow"]);
+    for l in golden.lines() {
+        let hex = l.rsplit(' ').next().unwrap();
+        assert!(hex.len() == 18 && hex.starts_with("0x"), "{l}");
+        assert!(hex[2..]
+            .bytes()
+            .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)));
+    }
 }
 
 #[test]

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Build the WASM demo for wasm32-wasip1 (release) and run it under Node's WASI.
-# Prints one line: narrow <count> 0x<hash>. Needs Node >= 20 and the wasm32-wasip1 target.
+# Build the WASM demo for wasm32-wasip1 (release) and run it under Node's WASI. Prints the
+# golden lines of tests/golden/checksums.txt, then `restored mixed 1000 0x...`; the
+# module's size goes to stderr. Needs Node >= 20 and the wasm32-wasip1 target.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 cd "$here"

@@ -1,47 +1,37 @@
-//! Prints the cross-target narrow-phase line `narrow <count> 0x<hash>` (see
-//! `demos/workload.rs`). Built for `wasm32-wasip1` it runs under Node's WASI (`run.mjs`);
-//! built for the host it gives the reference line the other targets are diffed against.
+//! Prints the golden lines of `tests/golden/checksums.txt` — the reference scenes
+//! (`Scene::REFERENCE`, each run in a fresh `ReferenceWorld`) and the narrow-phase
+//! workload — then restores the host's snapshot of `mixed` at step 500
+//! (`tests/golden/mixed_500.snap`, built into the binary), finishes the run and prints
+//! `restored mixed 1000 0x<checksum>`. Built for `wasm32-wasip1` it runs under Node's WASI
+//! (`run.mjs`); built for the host it prints the same lines. Exits 1 on an error.
 
-#[path = "../../workload.rs"]
-mod workload;
+use carom::scenes::{self, ReferenceWorld, Scene, REFERENCE_HULLS, SEED};
+use carom::{ConvexHull, Vec3};
+
+/// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`].
+static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500.snap");
 
 fn main() {
-    println!("{}", workload::run_narrow_workload());
+    if let Err(e) = run() {
+        eprintln!("error: {e:?}");
+        std::process::exit(1);
+    }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::workload::{run_narrow_workload, Fnv1a64, WORKLOAD_PAIRS};
-
-    #[test]
-    fn fnv1a64_matches_the_published_test_vectors() {
-        // Reference values from the FNV test suite: "" and "a".
-        assert_eq!(Fnv1a64::new().finish(), 0xcbf2_9ce4_8422_2325);
-        let mut h = Fnv1a64::new();
-        h.write_u8(b'a');
-        assert_eq!(h.finish(), 0xaf63_dc4c_8601_ec8c);
+fn run() -> Result<(), carom::Error> {
+    let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
+    let mut hulls = vec![placeholder; REFERENCE_HULLS];
+    scenes::make_hulls(&mut hulls, SEED)?;
+    // About 540 KB: on the heap, not on wasm's 1 MiB stack.
+    let mut world: Box<ReferenceWorld<'_>> = Box::default();
+    for scene in Scene::REFERENCE {
+        *world = ReferenceWorld::new();
+        let checksum = scene.run(&mut world, &hulls)?;
+        println!("{}", scene.line(checksum));
     }
-
-    #[test]
-    fn negative_zero_and_nan_payloads_hash_canonically() {
-        let hash_of = |x: f32| {
-            let mut h = Fnv1a64::new();
-            h.write_f32(x);
-            h.finish()
-        };
-        assert_eq!(hash_of(-0.0), hash_of(0.0));
-        assert_eq!(hash_of(f32::from_bits(0x7fc0_0001)), hash_of(f32::NAN));
-        assert_ne!(hash_of(f32::NAN), hash_of(0.0));
-        assert_ne!(hash_of(1.0), hash_of(-1.0));
-    }
-
-    #[test]
-    fn workload_runs_every_pair_and_repeats_bit_for_bit() {
-        let first = run_narrow_workload();
-        assert_eq!(first.count, WORKLOAD_PAIRS);
-        assert_eq!(first, run_narrow_workload());
-        let line = first.to_string();
-        assert!(line.starts_with("narrow 256 0x"), "{line}");
-        assert_eq!(line.len(), "narrow 256 0x".len() + 16, "{line}");
-    }
+    println!("{}", scenes::narrow::run());
+    *world = ReferenceWorld::new();
+    let checksum = scenes::continue_from_snapshot(Scene::Mixed, &mut world, &hulls, MIXED_500)?;
+    println!("restored {}", Scene::Mixed.line(checksum));
+    Ok(())
 }

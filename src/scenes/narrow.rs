@@ -1,36 +1,35 @@
-//! The cross-target narrow-phase workload: one definition, run by the Cortex-M firmware
-//! (under QEMU), the WASM demo (under Node) and the host build, which must all print the
-//! same line
+//! The cross-target narrow-phase workload: [`PAIRS`] seeded random pairs of spheres,
+//! capsules, boxes and hulls through [`distance`] and [`contact`], every input pose and
+//! every output number hashed. The host test, the Cortex-M firmware (under QEMU) and the
+//! WASM build (under Node) all print its line, which `tests/golden/checksums.txt` holds:
 //!
 //! ```text
 //! narrow 256 0x<16 hex digits>
 //! ```
 //!
-//! The hex number is an FNV-1a 64 hash of the bits of every input pose and every output
-//! number of `carom::collide::distance` and `carom::collide::contact`, so one flipped bit
-//! anywhere on any target changes the line.
-//!
-//! This file is `core`-only (no `std`, no `alloc`) and is included with `#[path]` by
-//! `demos/cortex-m/src/main.rs` and `demos/wasm/src/main.rs`. It belongs in the crate's
-//! shared scenes module (`carom::scenes`) once that exists; the line must not change when
-//! it moves.
+//! One flipped bit in any result on any target changes the line.
 //!
 //! Canonical hashing: `-0.0` is hashed as `+0.0` (targets may differ in the sign of a zero
 //! without differing in value), and every NaN as the one quiet NaN `0x7fc0_0000` (NaN
 //! payloads are not portable, e.g. on wasm32). A NaN still changes the hash, so it is
 //! still caught.
+//!
+//! This is the workload that lived in `demos/workload.rs`, moved unchanged: the draw order
+//! and the hash stream are part of the golden line, so they must not change.
 
-use carom::collide::{contact, distance, GjkStatus, Manifold, SimplexCache};
-use carom::math::{Iso, Vec3};
-use carom::rng::SplitMix64;
-use carom::shape::{ConvexHull, Shape};
+use crate::collide::{contact, distance, GjkStatus, Manifold, SimplexCache};
+use crate::math::{Iso, Vec3};
+use crate::rng::SplitMix64;
+use crate::shape::{ConvexHull, Shape, Sphere};
 
 /// Seed of the workload's generator (ASCII "carom!").
-pub const WORKLOAD_SEED: u64 = 0x6361_726f_6d21;
+pub const SEED: u64 = 0x6361_726f_6d21;
 /// Number of shape pairs the workload queries.
-pub const WORKLOAD_PAIRS: u32 = 256;
-/// Speculative margin passed to `contact` (m).
-pub const WORKLOAD_MARGIN: f32 = 0.02;
+pub const PAIRS: u32 = 256;
+/// Speculative margin passed to [`contact`] (m).
+pub const MARGIN: f32 = 0.02;
+/// Name of the workload's golden line.
+pub const NAME: &str = "narrow";
 /// Number of distinct hulls the pairs draw from.
 const HULLS: usize = 4;
 /// Points per hull, random on the unit sphere.
@@ -41,10 +40,17 @@ const TAG_ERR: u32 = 0xE000_0000;
 const TAG_NONE: u32 = 0xA000_0000;
 const TAG_SOME: u32 = 0xB000_0000;
 
-/// FNV-1a, 64-bit (Fowler, Noll, Vo): `h = (h ^ byte) · 0x100000001b3`, from the offset
-/// basis `0xcbf29ce484222325`. Bytes are fed little-endian, so the hash does not depend on
-/// the target's byte order.
+/// FNV-1a, 64-bit (Fowler, Noll, Vo): `h = (h ^ byte) · 0x100000001b3` (wrapping), from
+/// the offset basis `0xcbf29ce484222325`. Multi-byte values are fed little-endian, so the
+/// hash does not depend on the target's byte order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fnv1a64(u64);
+
+impl Default for Fnv1a64 {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 impl Fnv1a64 {
     /// A hash at the FNV offset basis.
@@ -83,7 +89,7 @@ impl Fnv1a64 {
         self.write_u32(bits);
     }
 
-    /// Feed a vector, x then y then z.
+    /// Feed a vector: x, then y, then z.
     pub fn write_vec3(&mut self, v: Vec3) {
         self.write_f32(v.x);
         self.write_f32(v.y);
@@ -106,24 +112,35 @@ impl Fnv1a64 {
 }
 
 /// What the workload did: how many pairs it ran and the hash of everything it saw.
-/// `Display` prints the line the demos compare: `narrow <count> 0x<hash>`.
+/// `Display` prints its golden line: `narrow <count> 0x<hash>`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct WorkloadResult {
+pub struct NarrowResult {
     /// Pairs queried.
     pub count: u32,
     /// FNV-1a 64 of the inputs and results.
     pub hash: u64,
 }
 
-impl core::fmt::Display for WorkloadResult {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(f, "narrow {} 0x{:016x}", self.count, self.hash)
+impl NarrowResult {
+    /// The golden line of this result.
+    pub fn line(&self) -> super::GoldenLine {
+        super::GoldenLine {
+            name: NAME,
+            steps: self.count,
+            checksum: self.hash,
+        }
     }
 }
 
-/// The random hulls the pairs draw from: 16 points on the unit sphere each. A hull that
-/// does not build (an error is a deterministic outcome too) stays `None` and its pairs use
-/// a unit cube instead; the error is hashed by the caller through `hull_built`.
+impl core::fmt::Display for NarrowResult {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.line().fmt(f)
+    }
+}
+
+/// The random hulls the pairs draw from: [`HULL_POINTS`] points on the unit sphere each.
+/// A hull that does not build (an error is a deterministic outcome too) stays `None` and
+/// its pairs use a cube of half-extent 0.5 m instead; the caller hashes which.
 fn build_hulls(rng: &mut SplitMix64) -> [Option<ConvexHull>; HULLS] {
     let mut hulls = [None; HULLS];
     for slot in hulls.iter_mut() {
@@ -170,7 +187,7 @@ fn random_shape<'h>(
         Ok(shape) => shape,
         Err(_) => {
             hash.write_u32(TAG_ERR);
-            Shape::Sphere(carom::shape::Sphere { radius: 0.5 })
+            Shape::Sphere(Sphere { radius: 0.5 })
         }
     }
 }
@@ -199,13 +216,13 @@ fn hash_manifold(m: &Manifold, hash: &mut Fnv1a64) {
     }
 }
 
-/// Run the workload: [`WORKLOAD_PAIRS`] seeded random pairs of spheres, capsules, boxes
-/// and hulls, A anywhere in a 4 m cube with a random rotation, B at a centre distance in
-/// [0.5, 2.0) m from A in a random direction with its own random rotation (from deep
-/// overlap to well apart). For each pair: `distance` from a cold cache, then `contact`
-/// with a 2 cm margin.
-pub fn run_narrow_workload() -> WorkloadResult {
-    let mut rng = SplitMix64::new(WORKLOAD_SEED);
+/// Run the workload: [`PAIRS`] seeded random pairs of spheres, capsules, boxes and hulls,
+/// A anywhere in a 4 m cube (world frame) with a random rotation, B at a centre distance
+/// in [0.5, 2.0) m from A in a random direction with its own random rotation (from deep
+/// overlap to well apart). For each pair: [`distance`] from a cold cache, then [`contact`]
+/// with the [`MARGIN`]. Uses about 15 KB of stack (four hulls), no other memory.
+pub fn run() -> NarrowResult {
+    let mut rng = SplitMix64::new(SEED);
     let mut hash = Fnv1a64::new();
     let hulls = build_hulls(&mut rng);
     for h in hulls.iter() {
@@ -215,7 +232,7 @@ pub fn run_narrow_workload() -> WorkloadResult {
         });
     }
     let mut count = 0;
-    for _ in 0..WORKLOAD_PAIRS {
+    for _ in 0..PAIRS {
         let a = random_shape(&mut rng, &hulls, &mut hash);
         let b = random_shape(&mut rng, &hulls, &mut hash);
         let pos_a = Vec3::new(
@@ -241,15 +258,70 @@ pub fn run_narrow_workload() -> WorkloadResult {
             }
             Err(_) => hash.write_u32(TAG_ERR),
         }
-        match contact(&a, &pose_a, &b, &pose_b, WORKLOAD_MARGIN) {
+        match contact(&a, &pose_a, &b, &pose_b, MARGIN) {
             Ok(Some(m)) => hash_manifold(&m, &mut hash),
             Ok(None) => hash.write_u32(TAG_NONE),
             Err(_) => hash.write_u32(TAG_ERR),
         }
         count += 1;
     }
-    WorkloadResult {
+    NarrowResult {
         count,
         hash: hash.finish(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::string::ToString;
+
+    #[test]
+    fn fnv1a64_matches_the_published_test_vectors() {
+        // Reference values from the FNV test suite (Noll): "" and "a" and "foobar".
+        assert_eq!(Fnv1a64::new().finish(), 0xcbf2_9ce4_8422_2325);
+        let mut h = Fnv1a64::new();
+        h.write_u8(b'a');
+        assert_eq!(h.finish(), 0xaf63_dc4c_8601_ec8c);
+        let mut h = Fnv1a64::new();
+        for b in b"foobar" {
+            h.write_u8(*b);
+        }
+        assert_eq!(h.finish(), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn multi_byte_values_are_fed_little_endian() {
+        let mut by_word = Fnv1a64::new();
+        by_word.write_u32(0x0403_0201);
+        let mut by_byte = Fnv1a64::new();
+        for b in [1u8, 2, 3, 4] {
+            by_byte.write_u8(b);
+        }
+        assert_eq!(by_word, by_byte);
+    }
+
+    #[test]
+    fn negative_zero_and_nan_payloads_hash_canonically() {
+        let hash_of = |x: f32| {
+            let mut h = Fnv1a64::new();
+            h.write_f32(x);
+            h.finish()
+        };
+        assert_eq!(hash_of(-0.0), hash_of(0.0));
+        assert_eq!(hash_of(f32::from_bits(0x7fc0_0001)), hash_of(f32::NAN));
+        assert_eq!(hash_of(f32::from_bits(0xffc0_0000)), hash_of(f32::NAN));
+        assert_ne!(hash_of(f32::NAN), hash_of(0.0));
+        assert_ne!(hash_of(1.0), hash_of(-1.0));
+    }
+
+    #[test]
+    fn the_workload_runs_every_pair_and_repeats_bit_for_bit() {
+        let first = run();
+        assert_eq!(first.count, PAIRS);
+        assert_eq!(first, run());
+        let line = first.to_string();
+        assert!(line.starts_with("narrow 256 0x"), "{line}");
+        assert_eq!(line.len(), "narrow 256 0x".len() + 16, "{line}");
     }
 }

@@ -1,6 +1,12 @@
 //! The standard scenes of `SCENES.md`, defined once and shared by tests, benchmarks and
 //! demos. Units are SI, gravity −Y, dt 1/60. "Jitter" comes from [`SplitMix64`] with a
 //! fixed seed, so every target builds the same scene.
+//!
+//! - [`Scene`]: the world scenes; [`Scene::REFERENCE`] are the ones whose checksums are
+//!   golden, run by [`Scene::run`] in a [`ReferenceWorld`].
+//! - [`narrow`]: the cross-target narrow-phase workload (the golden `narrow` line).
+//! - [`queries`]: the query sets of the narrow-phase benchmarks.
+//! - [`GoldenLine`]: one line of `tests/golden/checksums.txt`, as every target prints it.
 
 use crate::dynamics::body::{BodyDesc, Material};
 use crate::dynamics::BodyHandle;
@@ -9,6 +15,9 @@ use crate::math::Vec3;
 use crate::rng::SplitMix64;
 use crate::shape::{ConvexHull, Shape};
 use crate::World;
+
+pub mod narrow;
+pub mod queries;
 
 /// The world type the reference scenes run in on every target (capacities are part of
 /// what a golden checksum means: drop rules depend on them).
@@ -151,6 +160,33 @@ impl Scene {
             world.step();
         }
         Ok(world.checksum())
+    }
+
+    /// The golden line of this scene with `checksum` after [`Scene::steps`] steps.
+    pub fn line(self, checksum: u64) -> GoldenLine {
+        GoldenLine {
+            name: self.name(),
+            steps: self.steps(),
+            checksum,
+        }
+    }
+}
+
+/// One line of `tests/golden/checksums.txt`, as the host test, the Cortex-M firmware and
+/// the WASM build print it: `<name> <steps> 0x<checksum as 16 hex digits>`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GoldenLine {
+    /// Scene or workload name ([`Scene::name`], [`narrow::NAME`]).
+    pub name: &'static str,
+    /// Steps run (for `narrow`: pairs queried).
+    pub steps: u32,
+    /// [`World::checksum`] after the steps (for `narrow`: the workload hash).
+    pub checksum: u64,
+}
+
+impl core::fmt::Display for GoldenLine {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{} {} 0x{:016x}", self.name, self.steps, self.checksum)
     }
 }
 
