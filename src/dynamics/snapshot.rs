@@ -1,6 +1,6 @@
 //! Checksums and snapshots of the world's dynamic state.
 //!
-//! # Format (version 1)
+//! # Format (version 2)
 //! Little-endian throughout, no pointer-sized values:
 //!
 //! | bytes | field |
@@ -37,7 +37,7 @@ use crate::shape::{Capsule, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triang
 use crate::World;
 
 /// Snapshot format version; bumped whenever the byte layout changes.
-pub const FORMAT_VERSION: u16 = 1;
+pub const FORMAT_VERSION: u16 = 2;
 
 const MAGIC: [u8; 8] = *b"CAROMSNP";
 const HEADER_LEN: usize = 8 + 2 + 1 + 1 + 12 + 4 + 8;
