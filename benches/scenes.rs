@@ -25,7 +25,10 @@ fn bench_scenes(c: &mut Criterion) {
     group.measurement_time(Duration::from_secs(20));
     for scene in Scene::ALL {
         let mut template: Box<BigWorld<'_>> = Box::new(World::new());
-        let cfg = WorldConfig { sleep_enabled: false, ..scene.config() };
+        let cfg = WorldConfig {
+            sleep_enabled: false,
+            ..scene.config()
+        };
         template.set_config(cfg).unwrap();
         scene.build(&mut template, hulls).unwrap();
         let steps = scene.steps();

@@ -7,7 +7,45 @@ use crate::shape::{Capsule, FeatureId, HalfSpace, Shape, Sphere, MAX_HULL_VERTIC
 /// Closest points between segments `p1–q1` and `p2–q2`: returns `(s, t)` with the points
 /// `p1 + s (q1 − p1)` and `p2 + t (q2 − p2)`, `s, t ∈ [0, 1]`. Degenerate segments
 /// (points) are handled. (Ericson, Real-Time Collision Detection, 5.1.9.)
+///
+/// Departure from Ericson: his answer is compared with the four end-to-segment pairs
+/// (each a well-conditioned projection) and the closest of the five is returned (his on
+/// ties). For segments that meet at a small angle θ his parameters carry about
+/// `ε / sin²θ` of rounding (at θ = 1e-4 rad in f32, more than the whole range), so his
+/// clamped answer can be the far end of two nearly parallel segments; the true closest
+/// pair is then one of the end pairs.
 pub fn segment_closest_points(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> (f32, f32) {
+    let (d1, d2) = (q1 - p1, q2 - p2);
+    let gap2 = |(s, t): (f32, f32)| (p2 + d2 * t - p1 - d1 * s).length_squared();
+    // The parameter of the point of segment `p + u d` closest to `x`, clamped.
+    let project = |x: Vec3, p: Vec3, d: Vec3| {
+        let dd = d.length_squared();
+        if dd > 0.0 {
+            scalar::clamp((x - p).dot(d) / dd, 0.0, 1.0)
+        } else {
+            0.0
+        }
+    };
+    let mut best = ericson_closest_points(p1, q1, p2, q2);
+    let mut best_gap2 = gap2(best);
+    let ends = [
+        (0.0, project(p1, p2, d2)),
+        (1.0, project(q1, p2, d2)),
+        (project(p2, p1, d1), 0.0),
+        (project(q2, p1, d1), 1.0),
+    ];
+    for pair in ends {
+        let g = gap2(pair);
+        if g < best_gap2 {
+            best = pair;
+            best_gap2 = g;
+        }
+    }
+    best
+}
+
+/// Ericson's closest points of two segments (5.1.9), see [`segment_closest_points`].
+fn ericson_closest_points(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> (f32, f32) {
     const EPS: f32 = 1.0e-12;
     let d1 = q1 - p1;
     let d2 = q2 - p2;
@@ -161,8 +199,10 @@ pub(crate) fn sphere_capsule(
 }
 
 /// Capsule `a` (A's frame) against capsule `b` at `b_in_a`: the segments' closest points
-/// (Ericson 5.1.9); when the segments are parallel within [`PARALLEL_SIN`] and overlap
-/// along A's axis, two points at the ends of the overlap. When the segments cross, the
+/// (Ericson 5.1.9), the normal along the lines' common perpendicular when both points are
+/// inside their segments ([`line_gap`]); when the segments are parallel within
+/// [`PARALLEL_SIN`] and overlap along A's axis, two points at the ends of the overlap.
+/// When the segments cross, the
 /// normal is `d₁ × d₂` turned towards B's centre; when they are collinear, `fallback` made
 /// perpendicular to A's segment.
 pub(crate) fn capsule_capsule(
@@ -184,9 +224,16 @@ pub(crate) fn capsule_capsule(
     // Closer than rounding noise of the coordinates, the segments meet and c₂ − c₁ has no
     // direction.
     let scale = p1.length() + q1.length() + p2.length() + q2.length();
-    let normal = match (c2 - c1).normalize_and_length() {
-        Some((n, gap)) if gap > TOUCH_TOLERANCE * scale => n,
-        _ => crossing_normal(d1, d2, b_in_a.position, fallback),
+    let touch = TOUCH_TOLERANCE * scale;
+    let interior = line_gap(p1, d1, p2, d2, s, t);
+    let normal = match interior {
+        // Both closest points inside their segments: the gap is along d₁ × d₂.
+        Some((n, gap)) if scalar::abs(gap) > touch => n * scalar::sign(gap),
+        Some(_) => crossing_normal(d1, d2, b_in_a.position, fallback),
+        None => match (c2 - c1).normalize_and_length() {
+            Some((n, gap)) if gap > touch => n,
+            _ => crossing_normal(d1, d2, b_in_a.position, fallback),
+        },
     };
     let (ra, rb) = (a.radius, b.radius);
     let mut m = LocalManifold::new(normal);
@@ -203,6 +250,31 @@ pub(crate) fn capsule_capsule(
     }
     m.non_empty()
 }
+
+/// When the closest points of two segments lie strictly inside both (`0 < s, t < 1`) and
+/// the segments are not parallel: the unit common normal `n = d₁ × d₂ / |d₁ × d₂|` of the
+/// two lines and the signed gap `n · (p₂ − p₁)` along it (m); `None` otherwise.
+///
+/// For lines that meet at an angle θ the closest points are ill-conditioned (their
+/// parameters carry about `ε / sin²θ` of rounding), and `c₂ − c₁` slides along the lines
+/// with them: for capsules crossing at 0.3° its direction is noise of 0.02 rad, and the
+/// two query orders disagree. The cross product's direction is off by only `ε / sin θ`,
+/// and the gap along it does not depend on where the points slid to.
+fn line_gap(p1: Vec3, d1: Vec3, p2: Vec3, d2: Vec3, s: f32, t: f32) -> Option<(Vec3, f32)> {
+    let inside = s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
+    let n = d1.cross(d2);
+    // The segments are not parallel: |d₁ × d₂| above rounding of |d₁| |d₂|.
+    let crossing = n.length_squared() > PARALLEL_NOISE * d1.length_squared() * d2.length_squared();
+    if !(inside && crossing) {
+        return None;
+    }
+    let (n, _) = n.normalize_and_length()?;
+    Some((n, n.dot(p2 - p1)))
+}
+
+/// `sin²` of the angle between two segments below which their cross product is rounding
+/// noise (`sin θ` of about 3e-6, some 50 ulps): treated as parallel by [`line_gap`].
+const PARALLEL_NOISE: f32 = 1.0e-11;
 
 /// Normal of two segments that meet: `d₁ × d₂` pointing towards B's centre (or along
 /// `fallback` when B's centre is in the plane of the two); for collinear segments,

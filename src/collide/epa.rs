@@ -17,8 +17,12 @@
 //!   an edge (so it is connected), and the horizon is the bounded list of its boundary
 //!   edges. A new face whose vertices are collinear (no usable normal) is refused; the
 //!   expansion is then redone with the faces the new point lies on (within the
-//!   tolerance) counted as visible, which removes the collinear vertex instead. The
-//!   polytope is changed only after every new face proved valid and fit.
+//!   tolerance) counted as visible, which removes the collinear vertex instead; likewise
+//!   when a new face would lie on a kept neighbour's plane turned the other way (an
+//!   inside-out fold). The polytope is changed only after every new face proved valid
+//!   and fit.
+//! - Face normals are computed at the corner opposite the longest edge
+//!   ([`gjk::triangle_normal`]), so sliver faces of `D` keep an accurate plane.
 //! - The seed is GJK's final simplex, blown up to a tetrahedron with support points. When
 //!   `D` is flat through the origin (crossing segments, a point on a triangle) the core
 //!   depth is exactly 0 along the flat normal: that is returned at once.
@@ -362,7 +366,7 @@ impl Polytope {
             (b - a).length_squared(),
             scalar::max((c - b).length_squared(), (a - c).length_squared()),
         );
-        let (normal, area2) = (b - a).cross(c - a).normalize_and_length()?;
+        let (normal, area2) = gjk::triangle_normal(a, b, c).normalize_and_length()?;
         // False for a NaN too: such a face counts as flat.
         let sound = area2 > EPA_FLAT_FACE * longest2;
         sound.then_some(EpaFace {
@@ -371,6 +375,22 @@ impl Polytope {
             distance: normal.dot(a),
             stalled: false,
         })
+    }
+
+    /// True when the new face `fresh` is turned back onto the kept face `kept` across their
+    /// shared edge: normals within [`EPA_COPLANAR_COS`] of opposite, and `kept`'s third
+    /// vertex not behind `fresh` by more than `tol` (m). The polytope would fold inside out
+    /// there: `w` lay on `kept`'s plane and the sign of rounding kept the face. A thin
+    /// but convex wedge of `D` (two crossing triangles 0.01 rad apart) also has nearly
+    /// opposite normals on its sharp edge, but there each face's third vertex lies
+    /// clearly behind the other.
+    fn folds_onto(&self, fresh: &EpaFace, kept: &EpaFace, tol: f32) -> bool {
+        let opposite = fresh.normal.dot(kept.normal) < -1.0 + EPA_COPLANAR_COS;
+        let [i, ..] = fresh.v;
+        let third = kept.v.into_iter().find(|k| !fresh.v.contains(k));
+        let behind =
+            third.is_some_and(|k| fresh.normal.dot(self.vertex(k).w - self.vertex(i).w) < -tol);
+        opposite && !behind
     }
 
     /// Index of the face closest to the origin (lowest index on ties), stalled faces
@@ -401,9 +421,19 @@ impl Polytope {
     /// rounding noise. When it is kept, the new face on the shared edge is coplanar with
     /// it and, if `w` and the edge are collinear (a vertex of the polytope on an edge of
     /// `D`, as GJK's seed often is), has no normal: [`Refused::Degenerate`], and the
-    /// caller retries with `coplanar > 0` so the neighbour goes too. Removing a face that
-    /// `w` is behind by at most `coplanar` dents the polytope by at most that much.
-    fn expand(&mut self, start: usize, w: SimplexVertex, coplanar: f32) -> Result<(), Refused> {
+    /// caller retries with `coplanar > 0` so the neighbour goes too. The same happens when
+    /// a kept neighbour is in the plane of `w` and a new face on its edge lies in that
+    /// plane turned the other way (an inside-out fold: two concentric boxes tilted by
+    /// 1 mrad put several corners of `D` on one face plane). Removing a face that `w` is
+    /// behind by at most `coplanar` dents the polytope by at most that much. `tol` (m) is
+    /// EPA's tolerance, for the fold test ([`Polytope::folds_onto`]).
+    fn expand(
+        &mut self,
+        start: usize,
+        w: SimplexVertex,
+        coplanar: f32,
+        tol: f32,
+    ) -> Result<(), Refused> {
         let new_index = self.vertex_count;
         if new_index >= MAX_EPA_VERTICES {
             return Err(Refused::Full);
@@ -413,7 +443,8 @@ impl Polytope {
         // Face indices are below MAX_EPA_FACES = 128: a byte each.
         let mut stack = [0u8; MAX_EPA_FACES];
         let mut top = 0;
-        let mut horizon = [(0u8, 0u8); MAX_HORIZON_EDGES];
+        // Boundary edges `(i, j)` of the removed region, with the kept face across each.
+        let mut horizon = [(0u8, 0u8, None::<usize>); MAX_HORIZON_EDGES];
         let mut horizon_len = 0;
         if let (Some(r), Some(s), Ok(id)) = (
             removed.get_mut(start),
@@ -453,7 +484,7 @@ impl Polytope {
                     }
                     None => {
                         let slot = horizon.get_mut(horizon_len).ok_or(Refused::Full)?;
-                        *slot = (i, j);
+                        *slot = (i, j, neighbour);
                         horizon_len += 1;
                     }
                 }
@@ -470,8 +501,15 @@ impl Polytope {
         *slot = w;
         let k = new_index as u8;
         let mut fresh = [EpaFace::default(); MAX_HORIZON_EDGES];
-        for (out, &(i, j)) in fresh.iter_mut().zip(horizon.iter().take(horizon_len)) {
-            *out = self.make_face(i, j, k).ok_or(Refused::Degenerate)?;
+        for (out, &(i, j, kept)) in fresh.iter_mut().zip(horizon.iter().take(horizon_len)) {
+            let face = self.make_face(i, j, k).ok_or(Refused::Degenerate)?;
+            let folded = kept
+                .and_then(|g| self.faces.get(g))
+                .is_some_and(|g| self.folds_onto(&face, g, tol));
+            if folded {
+                return Err(Refused::Degenerate);
+            }
+            *out = face;
         }
         self.vertex_count = new_index + 1;
         let mut kept = 0;
@@ -575,7 +613,7 @@ fn seed(
                 }
             }
             3 => {
-                let Some((n, _)) = (w1 - w0).cross(w2 - w0).normalize_and_length() else {
+                let Some((n, _)) = gjk::triangle_normal(w0, w1, w2).normalize_and_length() else {
                     s.count = 2;
                     continue;
                 };
@@ -586,7 +624,17 @@ fn seed(
                     s.count = 2;
                     continue;
                 }
-                let cands = [gjk::support(pa, pb, n), gjk::support(pa, pb, -n)];
+                // A support point that is already a vertex of the triangle lies in its
+                // plane, whatever rounding says its height is: it stands in as w0 (height
+                // 0), so only a new point can lift the seed off the plane.
+                let known = |v: SimplexVertex| s.used().iter().any(|u| u.same_as(&v));
+                let cands = [gjk::support(pa, pb, n), gjk::support(pa, pb, -n)].map(|v| {
+                    if known(v) {
+                        s.vertices[0]
+                    } else {
+                        v
+                    }
+                });
                 match farthest(&cands, tol, |w| scalar::abs(n.dot(w - w0))) {
                     Some(v) => {
                         s.push(v);
@@ -595,8 +643,7 @@ fn seed(
                 }
             }
             _ => {
-                let height = (w1 - w0)
-                    .cross(w2 - w0)
+                let height = gjk::triangle_normal(w0, w1, w2)
                     .normalize_and_length()
                     .map(|(n, _)| scalar::abs(n.dot(w3 - w0)))
                     .unwrap_or(0.0);
@@ -717,8 +764,8 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
         // Faces `w` lies on are removed only when keeping them would build a flat face
         // (a retry after an unchanged, refused polytope); other answers stay as they
         // were bit for bit. Denting by `tol` stays within EPA's tolerance.
-        let grown = match poly.expand(fi, w, 0.0) {
-            Err(Refused::Degenerate) => poly.expand(fi, w, tol),
+        let grown = match poly.expand(fi, w, 0.0, tol) {
+            Err(Refused::Degenerate) => poly.expand(fi, w, tol, tol),
             other => other,
         };
         match grown {
@@ -993,13 +1040,13 @@ mod tests {
         // Deciding G on the sign alone keeps it; the fan then builds (p0 p1 w), three
         // points within 1e-6 of a line (area ratio 3e-7): refused, polytope unchanged.
         let mut strict = fresh();
-        assert_eq!(strict.expand(s, w, 0.0), Err(Refused::Degenerate));
+        assert_eq!(strict.expand(s, w, 0.0, 1.0e-5), Err(Refused::Degenerate));
         assert_eq!((strict.vertex_count, strict.face_count), (4, 4));
         // Counting faces within 1e-5 as seen removes G too: p1 drops out (it lies on the
         // segment p0 w within 1e-6), and every vertex is behind every new face (convex,
         // to the 1e-5 the test allowed).
         let mut tolerant = fresh();
-        assert_eq!(tolerant.expand(s, w, 1.0e-5), Ok(()));
+        assert_eq!(tolerant.expand(s, w, 1.0e-5, 1.0e-5), Ok(()));
         assert_eq!((tolerant.vertex_count, tolerant.face_count), (5, 4));
         for f in tolerant.used_faces() {
             assert!(!f.v.contains(&1), "{f:?}");

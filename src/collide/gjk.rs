@@ -45,18 +45,27 @@ pub const MAX_GJK_ITERATIONS: u32 = 32;
 /// polytopes, so the exact answer is normally reached first (tests 2 and 3).
 pub(crate) const GJK_RELATIVE_TOLERANCE: f32 = 4.0e-6;
 
-/// Termination test 3 accepts steps that leave `|v|²` unchanged within this relative
-/// rounding (eight f32 ulps)...
+/// Termination test 3 accepts steps that leave `|v|²` unchanged within rounding: this
+/// fraction (eight f32 ulps) of `|v| · max |w|`. The closest point is computed from the
+/// simplex vertices, so its error is a few ulps of their size `max |w|`, not of `|v|`;
+/// `|v|²` moves by twice `|v|` times that. (Relative to `|v|²` alone, a point 0.5 mm from
+/// the origin inside an 11 m simplex would be held to 1e-10 m: GJK would stop on the
+/// rounding of a sliver triangle and call cores apart that overlap.)...
 const GJK_ROUNDING: f32 = 1.0e-6;
 
 /// ...and this many such steps in a row end the search.
 const GJK_MAX_PLATEAU: u32 = 4;
 
-/// Cores closer than this fraction of the simplex size (the longest `|w|` in it) count as
-/// overlapping. Rounding in `v = Σ λ w` is a few ulps of `|w|` (about 1e-7 relative), so
-/// exactly touching cores (a box resting on a box) come out as `|v| ≈ 1e-7 |w|`; 1e-5
-/// keeps a margin of two orders of magnitude. At a 1 m scale this is 10 µm.
+/// Cores closer than this fraction of the size of `D` seen by the run (the longest `|w|`
+/// of any point of `D` it took, the simplex's included) count as overlapping. Rounding in
+/// `v = Σ λ w` is a few ulps of `|w|` (about 1e-7 relative), so exactly touching cores (a
+/// box resting on a box) come out as `|v| ≈ 1e-7 |w|`; 1e-5 keeps a margin of two orders
+/// of magnitude. At a 1 m scale this is 10 µm.
 pub(crate) const GJK_OVERLAP_TOLERANCE: f32 = 1.0e-5;
+
+/// `|v|²` (m²) at or below which `v` has no direction: the floor of
+/// [`Vec3::normalize_and_length`]. Cores this close count as touching whatever their size.
+const GJK_NO_DIRECTION: f32 = 1.0e-20;
 
 /// The simplex GJK ended with, as vertex indices on A and B, to warm-start the next call
 /// for the same pair. `Default` is an empty cache.
@@ -494,27 +503,56 @@ fn largest_axis(v: Vec3) -> usize {
 }
 
 /// Closest point of the segment `a b` to the origin: barycentric coordinates and the
-/// point. The origin is projected on the line, `p0 = a − t (a·t / t·t)` with `t = b − a`;
-/// the coordinates are signed lengths along the axis where the segment is longest (S1D).
-/// Inside the segment the point returned is `p0` itself, which unlike `Σ λ w` does not
-/// inherit the coordinates' rounding.
+/// point. The origin is projected on the line, `p0 = a − t (a·t / t·t)` with `t = b − a`
+/// (written from `b` when `b` is nearer the origin); the coordinates are signed lengths
+/// along the axis where the segment is longest (S1D). Inside the segment the point
+/// returned is `p0` itself, which unlike `Σ λ w` does not inherit the coordinates'
+/// rounding.
+///
+/// Departure from the paper: the projection starts from the nearer end. `p0` is a
+/// difference that cancels down to `|p0|`, and its error is a few ulps of the end it
+/// starts from; from the far end of a long edge of `D` (12 m) with the origin 0.3 mm off
+/// it, that error (1e-6 m) tilts `p0` by 3e-3 rad, and the support point along `−p0` then
+/// lands on the far end again: GJK stops on the wrong feature (fuzz regression
+/// `sphere_near_sliver_hull_edge`). And one step of iterative refinement: with both ends
+/// 8 m away and `p0` 1 mm from the origin, even the nearer end leaves an ulp of 8 m
+/// (5e-7 m) in `p0`, which can zero the one component that tells two 15 m-apart support
+/// vertices apart (fuzz regression `triangle_edge_through_triangle_corner`).
 pub(crate) fn s1d(a: Vec3, b: Vec3) -> ([f32; 2], Vec3) {
     let t = b - a;
     let tt = t.length_squared();
     if !(tt > 0.0 && tt.is_finite()) {
         return ([1.0, 0.0], a);
     }
-    let p0 = a - t * (a.dot(t) / tt);
+    let q = nearest_to_origin(a, b);
+    let p0 = q - t * (q.dot(t) / tt);
+    // One step of iterative refinement: p0 must be orthogonal to t, and the residual
+    // p0·t is a product of the small p0, so it is accurate where p0 itself lost the
+    // digits of q; removing it restores orthogonality to ulps of |p0|.
+    let p0 = p0 - t * (p0.dot(t) / tt);
     let i = largest_axis(t);
     let mu = a[i] - b[i];
     let c_a = p0[i] - b[i]; // λa · mu
     let c_b = a[i] - p0[i]; // λb · mu
     if same_sign(mu, c_a) && same_sign(mu, c_b) {
-        ([c_a / mu, c_b / mu], p0)
+        // Divided by their own sum (equal to mu up to rounding) so the coordinates sum
+        // to 1 and the witnesses Σ λ a, Σ λ b are convex combinations, inside the cores.
+        let sum = c_a + c_b;
+        ([c_a / sum, c_b / sum], p0)
     } else if same_sign(mu, c_a) {
         ([1.0, 0.0], a)
     } else {
         ([0.0, 1.0], b)
+    }
+}
+
+/// The one of `p`, `q` nearer the origin (`p` on ties).
+#[inline]
+fn nearest_to_origin(p: Vec3, q: Vec3) -> Vec3 {
+    if q.length_squared() < p.length_squared() {
+        q
+    } else {
+        p
     }
 }
 
@@ -525,18 +563,23 @@ fn area2(p: Vec3, q: Vec3, r: Vec3, j: usize, k: usize) -> f32 {
 }
 
 /// Closest point of the triangle `a b c` to the origin: barycentric coordinates and the
-/// point (S2D). The origin is projected on the plane, `p0 = n (a·n / n·n)`; its
+/// point (S2D). The origin is projected on the plane, `p0 = n (q·n / n·n)` with `q` the
+/// vertex nearest the origin; its
 /// coordinates are signed areas in the coordinate plane where the triangle's projection
 /// is largest (the one orthogonal to `n`'s largest component). If one is of the wrong
 /// sign, the closest point lies on an edge opposite such a vertex: those edges are
 /// searched with [`s1d`]. Inside, the point returned is `p0`: on a sliver triangle the
 /// area ratios lose digits, the projection does not.
 pub(crate) fn s2d(a: Vec3, b: Vec3, c: Vec3) -> ([f32; 3], Vec3) {
-    let n = (b - a).cross(c - a);
+    let n = triangle_normal(a, b, c);
     let nn = n.length_squared();
     let mut search = [true; 3];
     if nn > 0.0 && nn.is_finite() {
-        let p0 = n * (a.dot(n) / nn);
+        // The plane's offset read at the vertex nearest the origin: `q·n` rounds to a
+        // few ulps of `|q| |n|`, so the nearest vertex gives the smallest error (see
+        // [`s1d`]).
+        let q = nearest_to_origin(nearest_to_origin(a, b), c);
+        let p0 = n * (q.dot(n) / nn);
         let i = largest_axis(n);
         let (j, k) = match i {
             0 => (1, 2),
@@ -550,7 +593,11 @@ pub(crate) fn s2d(a: Vec3, b: Vec3, c: Vec3) -> ([f32; 3], Vec3) {
         let c_c = area2(a, b, p0, j, k);
         let (s_a, s_b, s_c) = (same_sign(mu, c_a), same_sign(mu, c_b), same_sign(mu, c_c));
         if s_a && s_b && s_c {
-            return ([c_a / mu, c_b / mu, c_c / mu], p0);
+            // Divided by their own sum, not mu: on a sliver the three areas lose digits
+            // (a 15 m triangle 0.5 mm wide: their sum was 0.998 of mu), and coordinates
+            // that do not sum to 1 put the witnesses Σ λ a, Σ λ b outside the cores.
+            let sum = c_a + c_b + c_c;
+            return ([c_a / sum, c_b / sum, c_c / sum], p0);
         }
         search = [!s_a, !s_b, !s_c];
     }
@@ -576,6 +623,32 @@ pub(crate) fn s2d(a: Vec3, b: Vec3, c: Vec3) -> ([f32; 3], Vec3) {
         consider([la, lb, 0.0], p);
     }
     best
+}
+
+/// The triangle's normal scaled by twice its area, `(b − a) × (c − a)`, computed at the
+/// corner opposite the longest edge (the same vector in exact arithmetic: the cross
+/// product is invariant under cyclic relabelling).
+///
+/// Departure from the textbook `(b − a) × (c − a)`: the cross product's rounding is a few
+/// ulps of the product of the two edge lengths it is built from, and excluding the
+/// longest edge makes that product the smallest. For a sliver of `D` (a 6 m edge and a
+/// 2 mm one, from a short capsule across a long one) the far corner's edges give a normal
+/// off by 2e-4 rad, which puts the sliver's own third vertex 1 mm off its plane; the
+/// corner opposite the long edge gives it to 1e-7 rad.
+#[inline]
+pub(crate) fn triangle_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    let (ab, bc, ca) = (
+        (b - a).length_squared(),
+        (c - b).length_squared(),
+        (a - c).length_squared(),
+    );
+    if bc >= ab && bc >= ca {
+        (b - a).cross(c - a)
+    } else if ca >= ab {
+        (c - b).cross(a - b)
+    } else {
+        (a - c).cross(b - c)
+    }
 }
 
 /// `a · (b × c)`.
@@ -702,11 +775,16 @@ fn fresh_start(pa: &Proxy, pb: &Proxy) -> Simplex {
     Simplex::single(support(pa, pb, dir))
 }
 
-/// True when `v` is within the overlap tolerance of the origin for this simplex.
+/// True when `v` is within the overlap tolerance of the origin, relative to `size2`: the
+/// largest `|w|²` of every point of `D` the run has taken (see [`gjk_cores`]); or too
+/// short to give a normal at all (`|v|² <= 1e-20`, the floor of
+/// [`Vec3::normalize_and_length`]): the answer "apart along a fallback normal" would be
+/// wrong, "touching" lets EPA find the direction. False for NaN.
 #[inline]
-fn touches_origin(v: Vec3, s: &Simplex) -> bool {
+fn touches_origin(v: Vec3, size2: f32) -> bool {
     let tol2 = GJK_OVERLAP_TOLERANCE * GJK_OVERLAP_TOLERANCE;
-    v.length_squared() <= tol2 * s.max_w_squared()
+    let vv = v.length_squared();
+    vv <= tol2 * size2 || vv <= GJK_NO_DIRECTION
 }
 
 /// GJK between two cores with signed volumes, warm-started from `cache` and writing the
@@ -718,18 +796,26 @@ pub(crate) fn gjk_cores(
     max_iterations: u32,
 ) -> CoreDistance {
     let start = warm_start(pa, pb, cache).unwrap_or_else(|| fresh_start(pa, pb));
+    // The overlap test's scale: the largest |w|² of every point of D taken so far, not
+    // only of the current simplex. When the closest point is a vertex of D within
+    // rounding of the origin (a sphere centred on a triangle's corner), the simplex
+    // shrinks to that one vertex, |w| ≈ |v|, and a test relative to the simplex alone
+    // would never fire: GJK would report the cores apart by 1e-21 m with a normal that is
+    // rounding noise (or the fallback), not a direction of D's normal cone.
+    let mut size2 = start.max_w_squared();
     let mut simplex = start.reduce();
     let mut v = simplex.closest();
     let mut status = GjkStatus::IterationLimit;
     let mut iterations = 0;
     let mut plateau = 0;
     while iterations < max_iterations {
-        if simplex.count == 4 || touches_origin(v, &simplex) {
+        if simplex.count == 4 || touches_origin(v, size2) {
             status = GjkStatus::Overlapping;
             break;
         }
         iterations += 1;
         let w = support(pa, pb, -v);
+        size2 = scalar::max(size2, w.w.length_squared());
         let vv = v.length_squared();
         // 1: the lower bound v·w/|v| is within the tolerance of the upper bound |v|.
         let gap = vv - v.dot(w.w);
@@ -757,7 +843,8 @@ pub(crate) fn gjk_cores(
             // (within GJK_ROUNDING) is still taken: the point moves to the right feature.
             // A few such steps in a row mean f32 cannot tell the candidates apart: stop.
             let kept = next.used().iter().any(|u| u.same_as(&w));
-            let progress = kept && vv_next <= vv + GJK_ROUNDING * vv;
+            let rounding = GJK_ROUNDING * scalar::sqrt(vv * grown.max_w_squared());
+            let progress = kept && vv_next <= vv + rounding;
             if !progress {
                 status = GjkStatus::Separated;
                 break;
@@ -773,7 +860,7 @@ pub(crate) fn gjk_cores(
         simplex = next;
         v = v_next;
     }
-    if status == GjkStatus::IterationLimit && (simplex.count == 4 || touches_origin(v, &simplex)) {
+    if status == GjkStatus::IterationLimit && (simplex.count == 4 || touches_origin(v, size2)) {
         status = GjkStatus::Overlapping;
     }
     write_cache(&simplex, cache);

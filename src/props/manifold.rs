@@ -1,7 +1,7 @@
 //! Properties of [`contact`] manifolds, checked against GJK distance, EPA depth, the
 //! shapes' support functions and the swapped query.
 
-use super::{check, Violation};
+use super::{accepted_pose, check, shape_size_in_range, Violation};
 use crate::collide::{contact, distance, penetration, Manifold, SimplexCache, MAX_MANIFOLD_POINTS};
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
@@ -34,13 +34,13 @@ pub const AGREE_REL: f32 = 0.005;
 
 /// Properties of `contact(a, pose_a, b, pose_b, margin)`:
 ///
-/// - it never panics; it refuses exactly the invalid inputs (non-finite or non-unit
-///   poses, negative or non-finite margin);
+/// - it never panics; it refuses exactly the invalid inputs (poses refused by
+///   [`accepted_pose`], negative or non-finite margin);
 /// - a manifold has 1 to [`MAX_MANIFOLD_POINTS`] points, all finite, a unit normal, and
 ///   every separation `<= margin`;
 ///
 /// and in the working range (coordinates, sizes and margin within [`MANIFOLD_WORKING_RANGE`],
-/// no needle triangles):
+/// shape sizes in range by [`shape_size_in_range`], no needle triangles):
 ///
 /// - every separation equals `(point_b − point_a) · normal`;
 /// - `local_a` maps to `point_a` by `pose_a`, `local_b` to `point_b` by `pose_b`;
@@ -59,7 +59,8 @@ pub fn manifold_properties(
     pose_b: &Iso,
     margin: f32,
 ) -> Result<(), Violation> {
-    let valid = pose_a.is_valid() && pose_b.is_valid() && margin.is_finite() && margin >= 0.0;
+    let valid =
+        accepted_pose(pose_a) && accepted_pose(pose_b) && margin.is_finite() && margin >= 0.0;
     let result = contact(a, pose_a, b, pose_b, margin);
     let Ok(found) = result else {
         return check(!valid, "manifold: valid input refused");
@@ -159,6 +160,8 @@ fn in_working_range(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso, margin: f3
         && margin <= r
         && well_shaped(a)
         && well_shaped(b)
+        && shape_size_in_range(a)
+        && shape_size_in_range(b)
 }
 
 /// False for a needle triangle, thinner than [`MIN_TRIANGLE_ASPECT`] of its longest

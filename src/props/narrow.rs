@@ -7,13 +7,54 @@ use crate::collide::{
     distance, penetration, segment_closest_points, EpaStatus, Penetration, SimplexCache,
     MAX_GJK_ITERATIONS,
 };
+use crate::error::MAX_COORDINATE;
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::{Shape, MAX_HULL_VERTICES};
+use crate::shape::{Shape, MAX_HULL_VERTICES, MAX_SIZE, MIN_SIZE};
 
 /// Largest scene scale (m, see [`query_scale`]) for which the geometric properties are
 /// checked. Beyond it f32 rounding of world coordinates grows past [`SLACK`]; only "no
 /// panic, finite output, unit normal, non-negative distance" is checked there.
 pub const WORKING_RANGE: f32 = 1.0e3;
+
+/// True when every half-width of `shape` lies in [[`MIN_SIZE`], [`MAX_SIZE`]], the range
+/// the constructors enforce for spheres, capsules and cuboids; the geometric properties
+/// are checked only then. Below it a face is thinner than the f32 rounding of the
+/// coordinates it sits at (the fuzzer's 1.1e-38 m box under a 3.6 m capsule) and its side
+/// planes are noise. The half-widths: a sphere's or capsule's radius, a capsule's
+/// half-height, a cuboid's half-extents; for a hull (not range-checked at construction)
+/// half its thinnest width and its local box's half-extents; for a triangle half its
+/// height over the longest edge and half that edge. A half-space has none. False for NaN.
+pub fn shape_size_in_range(shape: &Shape) -> bool {
+    let ok = |x: f32| (MIN_SIZE..=MAX_SIZE).contains(&x);
+    match shape {
+        Shape::HalfSpace(_) => true,
+        Shape::Sphere(s) => ok(s.radius),
+        Shape::Capsule(c) => ok(c.radius) && ok(c.half_height),
+        Shape::Cuboid(c) => {
+            let h = c.half_extents;
+            ok(h.x) && ok(h.y) && ok(h.z)
+        }
+        Shape::Hull(_) => {
+            let half = shape.local_aabb().half_extents();
+            ok(0.5 * shape.min_extent()) && half.max_elem() <= MAX_SIZE
+        }
+        Shape::Triangle(t) => {
+            let [v0, v1, v2] = t.vertices;
+            let twice_area = (v1 - v0).cross(v2 - v0).length();
+            let mut longest = 0.0;
+            for e in [v1 - v0, v2 - v1, v0 - v2] {
+                longest = scalar::max(longest, e.length());
+            }
+            // Height over the longest edge: twice the area over that edge.
+            let height = if longest > 0.0 {
+                twice_area / longest
+            } else {
+                0.0
+            };
+            ok(0.5 * height) && ok(0.5 * longest)
+        }
+    }
+}
 
 /// Geometric slack, relative to the scene scale: f32 carries about 6e-8 relative
 /// precision; a world ↔ local transform, GJK's closest points (its relative stop
@@ -58,10 +99,12 @@ const PROBES: [Vec3; 14] = {
 /// Properties of [`distance`] for `a` at `pose_a` and `b` at `pose_b`:
 ///
 /// - it never panics and refuses exactly the invalid poses (non-finite, non-unit
-///   rotation); the rest is checked on the poses with their rotations normalised;
+///   rotation, a coordinate beyond ±[`MAX_COORDINATE`]: see [`accepted_pose`]); the
+///   rest is checked on the poses with their rotations normalised;
 /// - the output is finite, `distance >= 0`, the normal unit length, the iteration count
 ///   at most [`MAX_GJK_ITERATIONS`];
-/// - in the [`WORKING_RANGE`], with slack `SLACK · scale`: each point lies in its shape
+/// - in the [`WORKING_RANGE`] with shape sizes in range ([`shape_size_in_range`]), with
+///   slack `SLACK · scale`: each point lies in its shape
 ///   (by support functions: `u·p <= h(u)` along 14 probe directions); when separated,
 ///   `|point_b − point_a| = distance`, the normal is along `point_b − point_a`, and each
 ///   point is its shape's support point along the normal (`n·p_a = h_A(n)`,
@@ -78,7 +121,7 @@ pub fn distance_properties(
     b: &Shape,
     pose_b: &Iso,
 ) -> Result<(), Violation> {
-    let valid = pose_a.is_valid() && pose_b.is_valid();
+    let valid = accepted_pose(pose_a) && accepted_pose(pose_b);
     let result = distance(a, pose_a, b, pose_b, &mut SimplexCache::default());
     if result.is_err() {
         return check(!valid, "distance: valid pose refused");
@@ -102,8 +145,7 @@ pub fn distance_properties(
         "distance: too many iterations",
     )?;
     let scale = query_scale(a, pose_a, b, pose_b);
-    let in_range = scale <= WORKING_RANGE;
-    if !in_range {
+    if !in_working_range(a, b, scale) {
         return Ok(());
     }
     let tol = SLACK * scale;
@@ -180,7 +222,8 @@ pub fn distance_properties(
 /// - it never panics and refuses exactly the invalid poses;
 /// - `None` exactly when GJK reports a distance `> 0` (or both are half-spaces);
 /// - `Some`: finite, `depth >= 0`, unit normal;
-/// - in the [`WORKING_RANGE`], with slack `SLACK · scale` and probe `PROBE · scale`:
+/// - in the [`WORKING_RANGE`] with shape sizes in range ([`shape_size_in_range`]), with
+///   slack `SLACK · scale` and probe `PROBE · scale`:
 ///   both points lie in their shapes; for converged answers
 ///   `point_b − point_a = −depth · normal`; moving B by `(depth + probe) · normal`
 ///   separates the shapes per GJK (every status, except GJK's own iteration cap on the
@@ -194,7 +237,7 @@ pub fn penetration_properties(
     b: &Shape,
     pose_b: &Iso,
 ) -> Result<(), Violation> {
-    let valid = pose_a.is_valid() && pose_b.is_valid();
+    let valid = accepted_pose(pose_a) && accepted_pose(pose_b);
     if penetration(a, pose_a, b, pose_b).is_err() {
         return check(!valid, "penetration: valid pose refused");
     }
@@ -226,8 +269,7 @@ pub fn penetration_properties(
     check(p.depth >= 0.0, "penetration: negative depth")?;
     check(is_unit(p.normal), "penetration: normal not unit length")?;
     let scale = query_scale(a, pose_a, b, pose_b);
-    let in_range = scale <= WORKING_RANGE;
-    if !in_range {
+    if !in_working_range(a, b, scale) {
         return Ok(());
     }
     let tol = SLACK * scale;
@@ -278,6 +320,12 @@ pub fn penetration_properties(
     Ok(())
 }
 
+/// True when the geometric properties apply: the scene scale is at most
+/// [`WORKING_RANGE`] and both shapes' sizes are in range ([`shape_size_in_range`]).
+fn in_working_range(a: &Shape, b: &Shape, scale: f32) -> bool {
+    scale <= WORKING_RANGE && shape_size_in_range(a) && shape_size_in_range(b)
+}
+
 /// True when GJK sees `a` and `b` touching after B moved by `t · p.normal`.
 fn touching_after(
     a: &Shape,
@@ -301,6 +349,12 @@ fn touching_after(
 /// rounding of the points themselves.
 fn vector_slack(d: f32, tol: f32) -> f32 {
     scalar::sqrt((2.0 * d + tol) * tol) + 2.0 * tol
+}
+
+/// True for a pose the queries accept: finite, unit rotation, every coordinate within
+/// ±[`MAX_COORDINATE`] (the API refuses farther positions with `OutOfRange`).
+pub fn accepted_pose(pose: &Iso) -> bool {
+    pose.is_valid() && pose.position.abs().max_elem() <= MAX_COORDINATE
 }
 
 /// The pose with its rotation normalised (the API accepts `|q|²` within 1e-3 of 1).

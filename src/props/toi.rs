@@ -1,7 +1,7 @@
 //! Properties of [`time_of_impact`] and [`movement_bounds`], checked against GJK distance
 //! sampled along the motions.
 
-use super::{check, Violation};
+use super::{check, shape_size_in_range, Violation};
 use crate::collide::{distance, movement_bounds, time_of_impact, Motion, SimplexCache, Toi};
 use crate::math::{Iso, Vec3};
 use crate::shape::Shape;
@@ -25,6 +25,15 @@ const WORKING_RANGE: f32 = 1.0e3;
 /// nothing up to about 20 rad (see `collide::toi`), so this leaves a margin of 3.
 const TURN_LIMIT: f32 = core::f32::consts::TAU;
 
+/// GJK's touching threshold, relative to the size of the numbers it works with: cores
+/// closer than this count as touching (distance 0). The value of
+/// `collide::gjk::GJK_OVERLAP_TOLERANCE`, which `props` cannot name.
+const GJK_TOUCH_RESOLUTION: f32 = 1.0e-5;
+
+/// How many GJK touching thresholds the tolerance must span for the gap checks (see
+/// [`resolvable`]).
+const RESOLVABLE_FACTOR: f32 = 10.0;
+
 /// Relative GJK accuracy allowed when comparing a sampled gap with the tolerance: the
 /// sampled GJK starts cold while the query warm-starts, so they may differ by rounding.
 const GAP_SLACK: f32 = 1.0e-5;
@@ -36,12 +45,15 @@ const UNIT_SLACK: f32 = 1.0e-3;
 ///
 /// - it never panics; a refused input is fine (the bad-input tests check the errors);
 /// - a hit time lies in `[0, t_max]`;
-/// - in the working range (coordinates, speeds, spins and sizes up to 1000, `t_max` up to
-///   10 s, `tolerance` in `[1e-4, 1]` m): a hit has a finite unit normal and finite
-///   points, and the shapes are apart at the hit time with a gap of at most `tolerance`
-///   (plus GJK slack); `Overlapping` means GJK distance 0 at time 0; each shape's box at
-///   [`TOI_BOUNDS_SAMPLES`] times in `[0, t_max]` lies in its [`movement_bounds`] over
-///   `t_max`;
+/// - in the working range (coordinates, speeds, spins and sizes up to 1000, sizes in range
+///   by [`super::shape_size_in_range`], `t_max` up to 10 s, `tolerance` in `[1e-4, 1]` m):
+///   each shape's box at [`TOI_BOUNDS_SAMPLES`] times in `[0, t_max]` lies in its
+///   [`movement_bounds`] over `t_max`; a hit has a finite unit normal and finite points;
+/// - there, when moreover GJK can resolve the tolerance (it is at least 10 times GJK's
+///   touching threshold, 1e-5 of both bounding radii plus the largest distance between
+///   the origins over the motions; always for a half-space pair): the shapes are apart at
+///   the hit time with a gap of at most `tolerance` (plus GJK slack); `Overlapping` means
+///   GJK distance 0 at time 0;
 /// - when moreover the two shapes turn at most one turn in total over `[0, t_max]`: no
 ///   contact is missed: [`TOI_EARLIER_SAMPLES`] times before a hit, or
 ///   [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after `Separated`, show the shapes
@@ -68,6 +80,25 @@ pub fn toi_properties(
     }
     bounds_hold(a, motion_a, t_max)?;
     bounds_hold(b, motion_b, t_max)?;
+    if let Toi::Hit {
+        normal,
+        point_a,
+        point_b,
+        ..
+    } = toi
+    {
+        check(
+            normal.is_finite() && point_a.is_finite() && point_b.is_finite(),
+            "toi: hit normal or points not finite",
+        )?;
+        check(
+            (1.0 - UNIT_SLACK..=1.0 + UNIT_SLACK).contains(&normal.length()),
+            "toi: hit normal not unit length",
+        )?;
+    }
+    if !resolvable(a, motion_a, b, motion_b, t_max, tolerance) {
+        return Ok(());
+    }
     let turn = (motion_a.angular.length() + motion_b.angular.length()) * t_max;
     let spin_in_range = turn <= TURN_LIMIT;
     let pair = Sampler {
@@ -79,18 +110,10 @@ pub fn toi_properties(
     match toi {
         Toi::Hit {
             time,
-            normal,
             point_a,
             point_b,
+            ..
         } => {
-            check(
-                normal.is_finite() && point_a.is_finite() && point_b.is_finite(),
-                "toi: hit normal or points not finite",
-            )?;
-            check(
-                (1.0 - UNIT_SLACK..=1.0 + UNIT_SLACK).contains(&normal.length()),
-                "toi: hit normal not unit length",
-            )?;
             let gap = pair.gap_at(time)?;
             let slack = GAP_SLACK * (1.0 + pair.scale(t_max));
             check(gap > 0.0, "toi: shapes overlap at the hit time")?;
@@ -183,7 +206,36 @@ impl Sampler<'_, '_> {
     }
 }
 
-/// True when every number is within [`WORKING_RANGE`] and the tolerance is at least
+/// True when GJK can tell a gap of `tolerance` from contact all along the motions: the
+/// tolerance is at least [`RESOLVABLE_FACTOR`] times GJK's touching threshold,
+/// [`GJK_TOUCH_RESOLUTION`] times the largest numbers it meets (both bounding radii plus
+/// the largest distance between the origins, `|c_b − c_a| + |v_b − v_a| t_max`). A
+/// half-space pair is a closed form with no such threshold.
+///
+/// Below it (boxes of 50 m and a 0.1 mm tolerance: GJK calls cores within 1.5 mm
+/// touching) the distance jumps from above the tolerance to 0, so no time has a gap in
+/// `(0, tolerance]`; a warm-started and a cold GJK may also disagree on "touching" near
+/// the threshold. The time of impact then stops within GJK's resolution of contact, which
+/// the gap checks cannot judge.
+fn resolvable(
+    a: &Shape,
+    motion_a: &Motion,
+    b: &Shape,
+    motion_b: &Motion,
+    t_max: f32,
+    tolerance: f32,
+) -> bool {
+    if matches!(a, Shape::HalfSpace(_)) || matches!(b, Shape::HalfSpace(_)) {
+        return true;
+    }
+    let apart = (motion_b.pose.position - motion_a.pose.position).length()
+        + (motion_b.linear - motion_a.linear).length() * t_max;
+    let size = a.bounding_radius() + b.bounding_radius() + apart;
+    tolerance >= RESOLVABLE_FACTOR * GJK_TOUCH_RESOLUTION * size
+}
+
+/// True when every number is within [`WORKING_RANGE`], both shapes' sizes are in range
+/// ([`shape_size_in_range`]), and the tolerance is at least
 /// `1e-4` m (below that, `f32` GJK error at metre scale is a sizeable part of it).
 fn in_working_range(
     a: &Shape,
@@ -194,8 +246,10 @@ fn in_working_range(
     tolerance: f32,
 ) -> bool {
     let small = |v: Vec3| v.abs().max_elem() <= WORKING_RANGE;
-    let sized =
-        |s: &Shape| matches!(s, Shape::HalfSpace(_)) || s.bounding_radius() <= WORKING_RANGE;
+    let sized = |s: &Shape| {
+        shape_size_in_range(s)
+            && (matches!(s, Shape::HalfSpace(_)) || s.bounding_radius() <= WORKING_RANGE)
+    };
     let moving = |m: &Motion| small(m.pose.position) && small(m.linear) && small(m.angular);
     moving(motion_a)
         && moving(motion_b)
