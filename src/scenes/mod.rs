@@ -239,23 +239,7 @@ pub fn boxes<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
     ground(world, Vec3::new(50.0, 0.5, 50.0))?;
-    let cube = Shape::cuboid(Vec3::splat(0.5))?;
-    let mut rng = SplitMix64::new(SEED);
-    let mut first = None;
-    for y in 0..10 {
-        for z in 0..10 {
-            for x in 0..10 {
-                let p = Vec3::new(
-                    (x as f32 - 4.5) * 1.2 + rng.range(-0.1, 0.1),
-                    2.0 + y as f32 * 1.2,
-                    (z as f32 - 4.5) * 1.2 + rng.range(-0.1, 0.1),
-                );
-                let hnd = world.add(BodyDesc::dynamic(cube).position(p))?;
-                first.get_or_insert(hnd);
-            }
-        }
-    }
-    first.ok_or(Error::OutOfRange(crate::Input::Config))
+    jittered_grid(world, Shape::cuboid(Vec3::splat(0.5))?, 10)
 }
 
 /// `spheres`: 4096 spheres (r 0.5) in a 16×16×16 grid, x, z = (i − 7.5)·1.2, y = 2 + j·1.2,
@@ -271,18 +255,28 @@ pub fn spheres<'a, const B: usize, const C: usize, const E: usize>(
         world.add(BodyDesc::fixed(wall_x).position(Vec3::new(s * 10.5, 15.0, 0.0)))?;
         world.add(BodyDesc::fixed(wall_z).position(Vec3::new(0.0, 15.0, s * 10.5)))?;
     }
-    let ball = Shape::sphere(0.5)?;
+    jittered_grid(world, Shape::sphere(0.5)?, 16)
+}
+
+/// `n`×`n`×`n` dynamic copies of `shape`, spacing 1.2, centred on x = z = 0, lowest layer
+/// at y = 2, jitter ±0.1 in x and z (x fastest, then z, then y). Returns the first body.
+fn jittered_grid<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+    shape: Shape<'a>,
+    n: u32,
+) -> Result<BodyHandle, Error> {
+    let centre = (n as f32 - 1.0) * 0.5;
     let mut rng = SplitMix64::new(SEED);
     let mut first = None;
-    for j in 0..16 {
-        for k in 0..16 {
-            for i in 0..16 {
+    for y in 0..n {
+        for z in 0..n {
+            for x in 0..n {
                 let p = Vec3::new(
-                    (i as f32 - 7.5) * 1.2 + rng.range(-0.1, 0.1),
-                    2.0 + j as f32 * 1.2,
-                    (k as f32 - 7.5) * 1.2 + rng.range(-0.1, 0.1),
+                    (x as f32 - centre) * 1.2 + rng.range(-0.1, 0.1),
+                    2.0 + y as f32 * 1.2,
+                    (z as f32 - centre) * 1.2 + rng.range(-0.1, 0.1),
                 );
-                let hnd = world.add(BodyDesc::dynamic(ball).position(p))?;
+                let hnd = world.add(BodyDesc::dynamic(shape).position(p))?;
                 first.get_or_insert(hnd);
             }
         }
