@@ -1,62 +1,102 @@
-//! Every tunable of the world, with its unit, default and reason.
+//! Every tunable of the world, with its unit, default, bounds and reason.
 //!
 //! The defaults suit bodies from about 5 cm to 10 m moving up to a few hundred metres per
 //! second, in SI units with gravity along −Y (see the README, "Units and conventions").
+//! Every field has a closed range that [`WorldConfig::validate`] enforces (the error names
+//! the first field out of range); the ranges keep every product the step forms inside
+//! `f32`, so no accepted configuration can make a world's state non-finite.
 
-use crate::error::{finite_vec, non_negative, positive, Error, Input};
+use crate::error::{Error, Input};
 use crate::math::Vec3;
 
-/// Allowed penetration (m) that projection and the solver leave in place, so resting
+/// Allowed penetration (m) that the solver and projection leave in place, so resting
 /// contacts stay touching instead of flickering. Box2D uses 0.005 m.
 pub const LINEAR_SLOP: f32 = 0.005;
 
+/// Extra margin (m) a full narrow phase keeps beyond the one the step asks for, so a
+/// manifold can be reused while its pair drifts by up to this much (see
+/// `dynamics::contact`, "Manifold reuse"). One slop.
+pub const REUSE_SLACK: f32 = LINEAR_SLOP;
+
 /// Settings of a [`crate::World`]. Build with [`WorldConfig::DEFAULT`] and change fields.
+///
+/// The solver is a *soft step* (Catto, "Solver2D", 2024; Box2D v3): each step is cut
+/// into `substeps` sub-steps; each sub-step integrates velocities, applies the
+/// accumulated impulses again (warm start), runs `velocity_iterations` soft iterations
+/// with a bounded push-out, integrates positions and runs `relax_iterations` iterations
+/// without push-out. Contacts are springs of `contact_hertz` with damping ratio
+/// `contact_damping_ratio`: stiff enough to hold stacks, soft enough never to explode.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct WorldConfig {
-    /// Gravity (m/s²). Default `(0, −9.81, 0)`.
+    /// Gravity (m/s²). Default `(0, −9.81, 0)`; each component within ±1000.
     pub gravity: Vec3,
-    /// Fixed time step (s). Default 1/60.
+    /// Fixed time step (s). Default 1/60; 1e-5 to 1.
     pub dt: f32,
-    /// Sub-steps per step, each of `dt / substeps`. Default 1; 1 to 64.
+    /// Sub-steps per step, each of `dt / substeps`. Default 4 (Box2D v3's); 1 to 64.
     pub substeps: u32,
-    /// Sequential-impulse velocity iterations per sub-step. Default 8; 1 to 255.
+    /// Soft (biased) contact iterations per sub-step. Default 1; 1 to 64.
     pub velocity_iterations: u32,
-    /// Projection (position) iterations per sub-step. Default 3; 0 to 255.
+    /// Relax iterations per sub-step: the normal rows without push-out (removing the
+    /// velocity the push-out added), friction, rolling and twist. Default 1; 1 to 64.
+    pub relax_iterations: u32,
+    /// Contact stiffness (Hz) of dynamic–dynamic contacts; contacts with a static or
+    /// kinematic body use twice this. Capped at a quarter of the sub-step rate inside the
+    /// step. Default 30 Hz (Box2D v3's); 0.1 to 1000.
+    pub contact_hertz: f32,
+    /// Contact damping ratio (dimensionless). Default 10 (heavily over-damped: no
+    /// bounce from the spring); 0 to 1000.
+    pub contact_damping_ratio: f32,
+    /// Largest speed (m/s) at which the soft contact pushes overlapping bodies apart.
+    /// Default 3 m/s (Box2D v3's `contactPushMaxVelocity`); 0 to 100.
+    pub max_push_speed: f32,
+    /// Projection passes per step over the contacts still deeper than `4 · slop` after
+    /// the solve. Default 1; 0 to 64.
     pub position_iterations: u32,
     /// Closing speed (m/s) above which restitution applies; slower impacts are
-    /// inelastic so resting contacts do not bounce. Default 1.0 m/s (Box2D's value).
+    /// inelastic so resting contacts do not bounce. Default 1.0 m/s (Box2D's value);
+    /// 0 to 1000.
     pub restitution_threshold: f32,
-    /// Penetration (m) left alone by projection. Default [`LINEAR_SLOP`].
+    /// Penetration (m) left alone by the solver's push-out and by projection. Default
+    /// [`LINEAR_SLOP`]; 0 to 0.1.
     pub slop: f32,
-    /// Fraction of the remaining penetration projection removes per iteration, 0 to 1.
+    /// Fraction of the remaining penetration projection removes per pass, 0 to 1.
     /// Default 0.2 (Catto's Baumgarte-like factor: fast enough, no overshoot).
     pub projection_factor: f32,
-    /// Largest correction (m) projection applies to one contact per iteration.
-    /// Default 0.2 m, so deep overlaps separate over several steps instead of exploding.
+    /// Largest distance (m) projection moves one body in one step, all its contacts
+    /// together. Default 0.05 m (3 m/s at 60 Hz: projection never moves a body faster
+    /// than the solver's push-out); 0 to 10.
     pub max_projection: f32,
-    /// Speculative margin (m): contact points this far apart are kept, so the solver stops
-    /// bodies before they touch. Default 0.02 m (4 × slop).
+    /// Speculative margin (m): contact points this far apart (plus the distance the pair
+    /// closes in one step) are kept, so the solver stops bodies before they touch.
+    /// Default 0.02 m (4 × slop); 0 to 10.
     pub speculative_margin: f32,
+    /// Margin (m) by which the broad phase enlarges a moving body's box, so a body that
+    /// moves a little keeps its box and its candidate pairs (no search). Default 0.1 m
+    /// (Box2D's `aabbMargin`); 0 to 10.
+    pub aabb_margin: f32,
     /// Relative tangential speed (m/s) below which a contact sticks (static friction).
-    /// Default 0.01 m/s.
+    /// Default 0.01 m/s; 0 to 100.
     pub stick_speed: f32,
-    /// Linear speed (m/s) below which a body may fall asleep. Default 0.05 m/s.
+    /// Linear speed (m/s) below which a body may fall asleep. Default 0.05 m/s; 0 to 100.
     pub sleep_linear_speed: f32,
-    /// Angular speed (rad/s) below which a body may fall asleep. Default 0.05 rad/s.
+    /// Angular speed (rad/s) below which a body may fall asleep. Default 0.05 rad/s;
+    /// 0 to 100.
     pub sleep_angular_speed: f32,
-    /// Time (s) an island must stay slow before it sleeps. Default 0.5 s.
+    /// Time (s) an island must stay slow before it sleeps. Default 0.5 s; 0 to 1e6.
     pub sleep_time: f32,
     /// Whether bodies may sleep at all. Default true; benchmarks switch it off.
     pub sleep_enabled: bool,
     /// Fraction of a body's smallest extent it may move in one step before continuous
-    /// collision sweeps it. Default 0.25.
+    /// collision sweeps it. Default 0.25; 1e-3 to 100.
     pub ccd_motion_fraction: f32,
-    /// Closing speed (m/s) above which a contact reports a hit event. Default 1.0 m/s.
+    /// Closing speed (m/s) above which a contact reports a hit event. Default 1.0 m/s;
+    /// 0 to 1e4.
     pub hit_event_speed: f32,
-    /// Largest linear speed (m/s) a body may reach; faster is clamped. Default 1000 m/s.
+    /// Largest linear speed (m/s) a body may reach; faster is clamped. Default 1000 m/s;
+    /// 1e-3 to 1e4.
     pub max_linear_speed: f32,
-    /// Largest angular speed (rad/s) a body may reach. Default 100 rad/s.
+    /// Largest angular speed (rad/s) a body may reach. Default 100 rad/s; 1e-3 to 1e4.
     pub max_angular_speed: f32,
 }
 
@@ -65,14 +105,19 @@ impl WorldConfig {
     pub const DEFAULT: WorldConfig = WorldConfig {
         gravity: Vec3::new(0.0, -9.81, 0.0),
         dt: 1.0 / 60.0,
-        substeps: 1,
-        velocity_iterations: 8,
-        position_iterations: 3,
+        substeps: 4,
+        velocity_iterations: 1,
+        relax_iterations: 1,
+        contact_hertz: 30.0,
+        contact_damping_ratio: 10.0,
+        max_push_speed: 3.0,
+        position_iterations: 1,
         restitution_threshold: 1.0,
         slop: LINEAR_SLOP,
         projection_factor: 0.2,
-        max_projection: 0.2,
+        max_projection: 0.05,
         speculative_margin: 4.0 * LINEAR_SLOP,
+        aabb_margin: 0.1,
         stick_speed: 0.01,
         sleep_linear_speed: 0.05,
         sleep_angular_speed: 0.05,
@@ -84,37 +129,62 @@ impl WorldConfig {
         max_angular_speed: 100.0,
     };
 
-    /// Check every field; the error names the first bad one.
+    /// Check every field against its documented range; the error names the first bad
+    /// one (`NonFinite` for NaN or infinity, `OutOfRange` otherwise).
     pub fn validate(&self) -> Result<(), Error> {
-        finite_vec(self.gravity, Input::Gravity)?;
-        positive(self.dt, Input::Time)?;
-        if self.substeps == 0 || self.substeps > 64 {
-            return Err(Error::OutOfRange(Input::Iterations));
+        let g = self.gravity;
+        for v in [g.x, g.y, g.z] {
+            within(v, -1000.0, 1000.0, Input::Gravity)?;
         }
-        if self.velocity_iterations == 0 || self.velocity_iterations > 255 {
-            return Err(Error::OutOfRange(Input::Iterations));
-        }
-        if self.position_iterations > 255 {
-            return Err(Error::OutOfRange(Input::Iterations));
-        }
-        non_negative(self.restitution_threshold, Input::Config)?;
-        non_negative(self.slop, Input::Distance)?;
-        non_negative(self.projection_factor, Input::Config)?;
-        if self.projection_factor > 1.0 {
-            return Err(Error::OutOfRange(Input::Config));
-        }
-        non_negative(self.max_projection, Input::Distance)?;
-        non_negative(self.speculative_margin, Input::Distance)?;
-        non_negative(self.stick_speed, Input::Config)?;
-        non_negative(self.sleep_linear_speed, Input::Config)?;
-        non_negative(self.sleep_angular_speed, Input::Config)?;
-        non_negative(self.sleep_time, Input::Time)?;
-        positive(self.ccd_motion_fraction, Input::Config)?;
-        non_negative(self.hit_event_speed, Input::Config)?;
-        positive(self.max_linear_speed, Input::Config)?;
-        positive(self.max_angular_speed, Input::Config)?;
+        within(self.dt, 1.0e-5, 1.0, Input::Time)?;
+        count(self.substeps, 1, 64)?;
+        count(self.velocity_iterations, 1, 64)?;
+        count(self.relax_iterations, 1, 64)?;
+        within(self.contact_hertz, 0.1, 1000.0, Input::Config)?;
+        within(self.contact_damping_ratio, 0.0, 1000.0, Input::Config)?;
+        within(self.max_push_speed, 0.0, 100.0, Input::Config)?;
+        count(self.position_iterations, 0, 64)?;
+        within(self.restitution_threshold, 0.0, 1000.0, Input::Config)?;
+        within(self.slop, 0.0, 0.1, Input::Distance)?;
+        within(self.projection_factor, 0.0, 1.0, Input::Config)?;
+        within(self.max_projection, 0.0, 10.0, Input::Distance)?;
+        within(self.speculative_margin, 0.0, 10.0, Input::Distance)?;
+        within(self.aabb_margin, 0.0, 10.0, Input::Distance)?;
+        within(self.stick_speed, 0.0, 100.0, Input::Config)?;
+        within(self.sleep_linear_speed, 0.0, 100.0, Input::Config)?;
+        within(self.sleep_angular_speed, 0.0, 100.0, Input::Config)?;
+        within(self.sleep_time, 0.0, 1.0e6, Input::Time)?;
+        within(self.ccd_motion_fraction, 1.0e-3, 100.0, Input::Config)?;
+        within(self.hit_event_speed, 0.0, 1.0e4, Input::Config)?;
+        within(self.max_linear_speed, 1.0e-3, 1.0e4, Input::Config)?;
+        within(self.max_angular_speed, 1.0e-3, 1.0e4, Input::Config)?;
         Ok(())
     }
+
+    /// The sub-step `h = dt / substeps` (s).
+    #[inline]
+    pub fn substep(&self) -> f32 {
+        self.dt / self.substeps as f32
+    }
+}
+
+/// `v` is finite and in `[lo, hi]`.
+fn within(v: f32, lo: f32, hi: f32, what: Input) -> Result<f32, Error> {
+    if !v.is_finite() {
+        return Err(Error::NonFinite(what));
+    }
+    if v < lo || v > hi {
+        return Err(Error::OutOfRange(what));
+    }
+    Ok(v)
+}
+
+/// An iteration count in `[lo, hi]`.
+fn count(n: u32, lo: u32, hi: u32) -> Result<u32, Error> {
+    if n < lo || n > hi {
+        return Err(Error::OutOfRange(Input::Iterations));
+    }
+    Ok(n)
 }
 
 impl Default for WorldConfig {

@@ -9,7 +9,8 @@ use crate::dynamics::contact::{self, Contact};
 use crate::dynamics::events::{Event, StepReport};
 use crate::dynamics::pool::{BodyHandle, Pool};
 use crate::dynamics::snapshot::{Stage, StepTrace};
-use crate::dynamics::{ccd, projection, sleep, solver};
+use crate::dynamics::solver::{self, Solver};
+use crate::dynamics::{ccd, projection, sleep};
 use crate::error::{finite_vec, Error, Input, Pool as PoolKind};
 use crate::math::{Iso, Quat, Vec3};
 use crate::shape::Shape;
@@ -27,7 +28,7 @@ pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: u
     pub(crate) broad: BroadPhase<BODIES>,
     pub(crate) pairs: HVec<(u32, u32), CONTACTS>,
     pub(crate) contacts: HVec<Contact, CONTACTS>,
-    pub(crate) scratch: HVec<Contact, CONTACTS>,
+    pub(crate) solver: Solver<BODIES, CONTACTS>,
     pub(crate) events: HVec<Event, EVENTS>,
     pub(crate) islands: [u32; BODIES],
     pub(crate) step_count: u64,
@@ -53,7 +54,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             broad: BroadPhase::new(),
             pairs: HVec::new(),
             contacts: HVec::new(),
-            scratch: HVec::new(),
+            solver: Solver::new(),
             events: HVec::new(),
             islands: [0; BODIES],
             step_count: 0,
@@ -102,66 +103,38 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// The pipeline, one call per stage (DESIGN.md, "One fixed step"):
     pub fn step_traced(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
         let cfg = self.config;
-        let h = cfg.dt / cfg.substeps as f32;
         let mut report = StepReport::default();
         self.events.clear();
-        for _ in 0..cfg.substeps {
-            // 1 integrate velocities: gravity, forces, damping
-            self.integrate_velocities(h);
-            self.trace(&mut trace, Stage::IntegrateVelocities);
-            // 2 movement bounds, 3 broad phase: sweep and prune -> candidate pairs
-            broad_phase::update_bounds(&mut self.bodies, &cfg, h);
-            let pairs = &mut self.pairs;
-            self.broad.find_pairs(&self.bodies, pairs, &mut report);
-            self.trace(&mut trace, Stage::BroadPhase);
-            // 4 mid phase: every shape is one convex part, so a pair is one part pair.
-            // 5 narrow phase and 6 contact cache: manifolds, matched, warm-started
-            let (contacts, scratch, events) =
-                (&mut self.contacts, &mut self.scratch, &mut self.events);
-            contact::update_contacts(
-                contacts,
-                scratch,
-                &self.pairs,
-                &self.bodies,
-                &cfg,
-                events,
-                &mut report,
-            );
-            self.trace(&mut trace, Stage::NarrowPhase);
-            // 7 velocity solve: normal and friction impulses
-            solver::solve_velocities(&mut self.contacts, &mut self.bodies, &cfg, h);
-            self.trace(&mut trace, Stage::Solve);
-            // 8 integrate positions: x += v h, q += ½ ω q h
-            self.integrate_positions(h);
-            self.trace(&mut trace, Stage::IntegratePositions);
-            // 9 continuous collision: time of impact for fast bodies
-            ccd::sweep_fast_bodies(&mut self.bodies, &self.pairs, &cfg, h, &mut report);
-            self.trace(&mut trace, Stage::Continuous);
-            // 10 projection: push out the penetration that remains
-            projection::project(&self.contacts, &mut self.bodies, &cfg);
-            self.trace(&mut trace, Stage::Projection);
-        }
-        // 11 sleep: islands fall asleep and wake together
+        // 1-2 movement bounds: bodies whose motion leaves their enlarged box get a new one
+        broad_phase::update_fat_boxes(&mut self.bodies, &cfg);
+        // 3 broad phase: new candidate pairs, searched around moved bodies only
+        let (bodies, contacts, pairs) = (&mut self.bodies, &mut self.contacts, &mut self.pairs);
+        self.broad
+            .find_new_pairs(bodies, contacts, pairs, &mut report);
+        contact::insert_pairs(contacts, pairs, bodies, &mut report);
+        self.trace(&mut trace, Stage::BroadPhase);
+        // 4 mid phase: every shape is one convex part, so a pair is one part pair.
+        // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
+        let events = &mut self.events;
+        contact::update_contacts(&mut self.contacts, &self.bodies, &cfg, events, &mut report);
+        self.trace(&mut trace, Stage::NarrowPhase);
+        // 7 solve in sub-steps: integrate, warm start, soft contacts, relax, restitution
+        solver::solve(&mut self.solver, &mut self.contacts, &mut self.bodies, &cfg);
+        self.trace(&mut trace, Stage::Solve);
+        // 8 continuous collision: time of impact for fast bodies
+        let (bodies, contacts, pairs) = (&mut self.bodies, &self.contacts, &mut self.pairs);
+        ccd::sweep_fast_bodies(bodies, contacts, pairs, &cfg, cfg.dt, &mut report);
+        self.trace(&mut trace, Stage::Continuous);
+        // 9 projection: bounded push-out of the deep penetration that remains
+        projection::project(&mut self.solver, &mut self.bodies, &cfg);
+        self.trace(&mut trace, Stage::Projection);
+        // 10 sleep: islands fall asleep and wake together
         report.awake_bodies =
             sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg);
         self.step_count = self.step_count.wrapping_add(1);
         self.trace(&mut trace, Stage::Sleep);
         self.report = report;
         report
-    }
-
-    fn integrate_velocities(&mut self, h: f32) {
-        let cfg = self.config;
-        for (_, b) in self.bodies.iter_mut() {
-            b.pose0 = b.pose;
-            b.integrate_velocity(&cfg, h);
-        }
-    }
-
-    fn integrate_positions(&mut self, h: f32) {
-        for (_, b) in self.bodies.iter_mut() {
-            b.integrate_position(h);
-        }
     }
 
     /// The report of the last step.
@@ -184,8 +157,14 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.bodies.len()
     }
 
-    /// Number of contacts (manifolds) alive after the last step.
+    /// Number of contacts with at least one point (manifolds) after the last step.
     pub fn contact_count(&self) -> usize {
+        self.contacts.iter().filter(|c| c.len > 0).count()
+    }
+
+    /// Number of pairs the broad phase tracks (enlarged boxes overlapping), with or
+    /// without contact points.
+    pub fn pair_count(&self) -> usize {
         self.contacts.len()
     }
 
@@ -198,12 +177,33 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             .ok_or(Error::PoolFull(PoolKind::Bodies))
     }
 
-    /// Remove a body and its contacts (without end events).
+    /// Remove a body and its contacts (without end events). Bodies it touched wake up,
+    /// so nothing stays asleep in the air.
     pub fn remove(&mut self, h: BodyHandle) -> Result<(), Error> {
+        self.bodies.get(h).ok_or(Error::StaleHandle)?;
+        self.wake_touching(h.index);
         self.bodies.remove(h).ok_or(Error::StaleHandle)?;
         self.contacts.retain(|c| c.a != h.index && c.b != h.index);
         self.broad.order.retain(|s| *s != h.index);
         Ok(())
+    }
+
+    /// Wake every dynamic body that has a contact with slot `slot`.
+    fn wake_touching(&mut self, slot: u32) {
+        for c in self.contacts.iter() {
+            let other = if c.a == slot {
+                c.b
+            } else if c.b == slot {
+                c.a
+            } else {
+                continue;
+            };
+            if let Some(b) = self.bodies.at_mut(other as usize) {
+                if b.is_dynamic() {
+                    wake(b);
+                }
+            }
+        }
     }
 
     /// Handles of all bodies in slot order.
@@ -225,12 +225,18 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// Teleport a body (wakes it). Fails on a stale handle or an invalid pose.
     pub fn set_pose(&mut self, h: BodyHandle, pose: Iso) -> Result<(), Error> {
         crate::collide::check_pose(&pose)?;
+        self.body_mut(h)?;
+        // What rested on it (or under it) must notice: wake the bodies it touched.
+        self.wake_touching(h.index);
         let b = self.body_mut(h)?;
         b.pose = Iso::new(pose.position, pose.rotation.normalize());
         b.pose0 = b.pose;
-        b.bounds = b.shape.aabb(&b.pose);
+        b.fat = b.shape.aabb(&b.pose);
+        b.moved = true;
         b.update_inertia();
-        wake(b);
+        if b.kind != BodyKind::Static {
+            wake(b);
+        }
         Ok(())
     }
 
@@ -258,13 +264,14 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 
     /// Add a force (N) at the centre of mass for the next step; wakes the body. Fails with
-    /// `OutOfRange(Force)` if the accumulated force would overflow `f32`.
+    /// `OutOfRange(Force)` if a component of the accumulated force would pass
+    /// [`crate::dynamics::snapshot::MAX_STATE_FORCE`] (1e30 N).
     pub fn apply_force(&mut self, h: BodyHandle, f: Vec3) -> Result<(), Error> {
         finite_vec(f, Input::Force)?;
         let b = self.body_mut(h)?;
         if b.is_dynamic() {
             let total = b.force + f;
-            if !total.is_finite() {
+            if !within_force_bound(total) {
                 return Err(Error::OutOfRange(Input::Force));
             }
             b.force = total;
@@ -273,13 +280,14 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         Ok(())
     }
 
-    /// Add a torque (N·m, world) for the next step; wakes the body.
+    /// Add a torque (N·m, world) for the next step; wakes the body. Fails with
+    /// `OutOfRange(Force)` as [`World::apply_force`] does.
     pub fn apply_torque(&mut self, h: BodyHandle, t: Vec3) -> Result<(), Error> {
         finite_vec(t, Input::Force)?;
         let b = self.body_mut(h)?;
         if b.is_dynamic() {
             let total = b.torque + t;
-            if !total.is_finite() {
+            if !within_force_bound(total) {
                 return Err(Error::OutOfRange(Input::Force));
             }
             b.torque = total;
@@ -337,6 +345,11 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.body_mut(h)?.material = m;
         Ok(())
     }
+}
+
+/// A force or torque a body may carry into a step (and a snapshot may hold).
+fn within_force_bound(v: Vec3) -> bool {
+    v.is_finite() && v.abs().max_elem() <= crate::dynamics::snapshot::MAX_STATE_FORCE
 }
 
 fn wake(b: &mut Body<'_>) {

@@ -17,7 +17,9 @@ fn no_gravity() -> WorldConfig {
 
 /// SCENES.md "bullet": a 5 cm ball at 500 m/s (8.3 m per step) against a 10 cm wall. It
 /// must never pass the wall: its centre stays in front of the near face less its radius,
-/// up to the slop that contacts may rest at.
+/// up to the slop that contacts may rest at. The pair's speculative contact reaches as
+/// far as the pair closes in a step, so the solver stops the ball at the face in the
+/// step it arrives (time of impact has nothing left to do).
 #[test]
 fn bullet_never_passes_the_wall() {
     let mut w: World<8, 16> = World::with_config(Scene::Bullet.config()).unwrap();
@@ -36,7 +38,7 @@ fn bullet_never_passes_the_wall() {
         assert!(x <= limit + SLOP, "x = {x}, beyond {limit} + slop");
     }
     eprintln!("bullet: max x {max_x}, ccd hits {hits}");
-    assert!(hits >= 1, "continuous collision never stopped it");
+    assert!(max_x > limit - 0.01, "stopped short of the wall: {max_x}");
     // The contact stopped it for good (no restitution): it rests at the wall.
     let v = w.body(bullet).unwrap().linear_velocity();
     assert!(v.length() < 1e-3, "still moving: {v:?}");
@@ -77,6 +79,7 @@ fn fast_balls_head_on_collide() {
         restitution: 0.0,
         static_friction: 0.0,
         kinetic_friction: 0.0,
+        ..Material::DEFAULT
     };
     let a = w
         .add(
@@ -104,7 +107,7 @@ fn fast_balls_head_on_collide() {
         assert!(gap > -SLOP, "gap {gap}");
     }
     eprintln!("fast balls: min gap {min_gap}, ccd hits {hits}");
-    assert!(hits >= 1);
+    assert!(min_gap < 0.01, "never met: {min_gap}");
     for h in [a, b] {
         let v = w.body(h).unwrap().linear_velocity();
         // Equal masses, e = 0: the impact leaves both at rest, up to f32 rounding of
@@ -142,7 +145,9 @@ fn bullets_stay_in_the_room() {
         }
     }
     eprintln!("bullets: ccd hits {hits}, deepest wall penetration {deepest} m");
-    assert!(hits >= scenes::BULLETS as u32, "only {hits} hits");
+    // Most impacts are stopped by speculative contacts; time of impact catches the balls
+    // another ball knocked out of their predicted paths.
+    assert!(hits >= 1, "time of impact never needed: {hits}");
 }
 
 /// A small box sliding fast along frictionless ground touches it all the time; that
@@ -154,6 +159,7 @@ fn fast_slider_is_not_stopped_by_the_ground() {
         restitution: 0.0,
         static_friction: 0.0,
         kinetic_friction: 0.0,
+        ..Material::DEFAULT
     };
     w.add(
         BodyDesc::fixed(Shape::cuboid(Vec3::new(50.0, 0.5, 5.0)).unwrap())

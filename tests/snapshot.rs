@@ -202,6 +202,7 @@ fn a_trace_names_the_first_stage_and_body_that_differ() {
             restitution: 0.0,
             static_friction: 0.0,
             kinetic_friction: 0.0,
+            ..Material::DEFAULT
         },
     )
     .unwrap();

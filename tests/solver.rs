@@ -21,6 +21,8 @@ fn frictionless(restitution: f32) -> Material {
         restitution,
         static_friction: 0.0,
         kinetic_friction: 0.0,
+        rolling_resistance: 0.0,
+        twist_friction: 0.0,
     }
 }
 
@@ -260,6 +262,7 @@ fn box_slides_down_an_incline_at_the_kinetic_rate() {
         restitution: 0.0,
         static_friction: 0.2,
         kinetic_friction: 0.2,
+        ..Material::DEFAULT
     };
     let s = incline_run(m, 0.0);
     let a = acceleration(s);
@@ -278,6 +281,7 @@ fn static_friction_holds_a_box_on_an_incline() {
         restitution: 0.0,
         static_friction: 0.7,
         kinetic_friction: 0.2,
+        ..Material::DEFAULT
     };
     let s = incline_run(m, 0.0);
     eprintln!("incline μs 0.7 at rest: slid {s:?} m");
@@ -291,6 +295,7 @@ fn a_pushed_box_keeps_sliding_at_the_kinetic_rate() {
         restitution: 0.0,
         static_friction: 0.7,
         kinetic_friction: 0.2,
+        ..Material::DEFAULT
     };
     let s = incline_run(m, 2.0);
     let a = acceleration(s);

@@ -163,7 +163,35 @@ fn bad_configs_are_refused_and_the_old_one_kept() {
                 dt: 0.0,
                 ..WorldConfig::DEFAULT
             },
-            Error::NotPositive(Input::Time),
+            Error::OutOfRange(Input::Time),
+        ),
+        (
+            WorldConfig {
+                dt: 1.0e6,
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Time),
+        ),
+        (
+            WorldConfig {
+                max_linear_speed: 3.0e38,
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Config),
+        ),
+        (
+            WorldConfig {
+                relax_iterations: 0,
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Iterations),
+        ),
+        (
+            WorldConfig {
+                gravity: Vec3::new(0.0, -1.0e5, 0.0),
+                ..WorldConfig::DEFAULT
+            },
+            Error::OutOfRange(Input::Gravity),
         ),
         (
             WorldConfig {
@@ -217,19 +245,21 @@ fn static_bodies_never_move_and_report_infinite_mass() {
 
 #[test]
 fn free_fall_matches_the_integrator_exactly() {
-    // Semi-implicit Euler: v_n = -g n dt, y_n = y0 - g dt² n(n+1)/2. No contact in reach.
+    // Semi-implicit Euler over sub-steps h = dt / s: after k sub-steps v_k = -g h k,
+    // y_k = y0 - g h² k(k+1)/2. No contact in reach.
     let mut w = W::new();
     let h = w
         .add(BodyDesc::dynamic(ball()).position(Vec3::new(0.0, 100.0, 0.0)))
         .unwrap();
-    let (g, dt) = (9.81f32, 1.0f32 / 60.0);
+    let g = 9.81f32;
+    let sub = 1.0f32 / 60.0 / WorldConfig::DEFAULT.substeps as f32;
     for _ in 0..60 {
         w.step();
     }
     let b = w.body(h).unwrap();
-    let n = 60.0;
-    assert!((b.linear_velocity().y + g * dt * n).abs() < 1e-3);
-    let y = 100.0 - g * dt * dt * n * (n + 1.0) / 2.0;
+    let n = 60.0 * WorldConfig::DEFAULT.substeps as f32;
+    assert!((b.linear_velocity().y + g * sub * n).abs() < 1e-3);
+    let y = 100.0 - g * sub * sub * n * (n + 1.0) / 2.0;
     assert!(
         (b.position().y - y).abs() < 1e-3,
         "{} vs {y}",

@@ -406,6 +406,7 @@ impl MaterialInput {
             restitution: self.restitution.value(RESTITUTION_UNIT),
             static_friction: self.static_friction.value(FRICTION_UNIT),
             kinetic_friction: self.kinetic_friction.value(FRICTION_UNIT),
+            ..Material::DEFAULT
         }
     }
 }

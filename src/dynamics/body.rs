@@ -1,7 +1,6 @@
 //! Rigid bodies: description, validated state, and the two integration stages of the
 //! step (velocities, then positions).
 
-use crate::config::WorldConfig;
 use crate::error::{finite_vec, non_negative, positive, Error, Input};
 use crate::math::{scalar, Aabb, Iso, Mat3, Quat, Vec3};
 use crate::shape::Shape;
@@ -20,7 +19,8 @@ pub enum BodyKind {
 }
 
 /// Surface properties. Two touching bodies combine theirs: restitution by the larger,
-/// each friction coefficient by the geometric mean `√(μa μb)`.
+/// each friction coefficient by the geometric mean `√(μa μb)`, rolling resistance and
+/// twist friction by the larger.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -32,24 +32,51 @@ pub struct Material {
     pub static_friction: f32,
     /// Kinetic friction coefficient (≥ 0): the cone while a contact slides.
     pub kinetic_friction: f32,
+    /// Rolling resistance coefficient (dimensionless, ≥ 0, as a tyre's `c_rr`): a body
+    /// rolling on one or two contact points feels a torque of at most
+    /// `rolling_resistance · N · r` against its rolling, with `N` the normal force and
+    /// `r` its lever arm to the contact. Manifolds of three or more points are flat
+    /// patches that do not roll, and skip it.
+    pub rolling_resistance: f32,
+    /// Twist (torsional) friction coefficient (dimensionless, ≥ 0): a body spinning
+    /// about the normal on a single contact point feels a torque of at most
+    /// `twist_friction · N · r`. Manifolds of two or more points resist twist through
+    /// their points' friction, and skip it.
+    pub twist_friction: f32,
 }
 
 impl Material {
-    /// No bounce, static friction 0.6, kinetic 0.4.
+    /// No bounce, static friction 0.6, kinetic 0.4, rolling resistance 0.01 and twist
+    /// friction 0.01 (hard surfaces: a ball at 1 m/s rolls about 7 m).
     pub const DEFAULT: Material = Material {
         restitution: 0.0,
         static_friction: 0.6,
         kinetic_friction: 0.4,
+        rolling_resistance: 0.01,
+        twist_friction: 0.01,
     };
 
-    /// Check ranges: restitution in `[0, 1]`, frictions finite and `≥ 0`.
+    /// Largest friction, rolling or twist coefficient accepted.
+    pub const MAX_COEFFICIENT: f32 = 100.0;
+
+    /// Check ranges: restitution in `[0, 1]`; friction, rolling and twist coefficients
+    /// finite and in `[0, 100]`.
     pub fn validate(&self) -> Result<(), Error> {
         non_negative(self.restitution, Input::Material)?;
         if self.restitution > 1.0 {
             return Err(Error::OutOfRange(Input::Material));
         }
-        non_negative(self.static_friction, Input::Material)?;
-        non_negative(self.kinetic_friction, Input::Material)?;
+        for c in [
+            self.static_friction,
+            self.kinetic_friction,
+            self.rolling_resistance,
+            self.twist_friction,
+        ] {
+            non_negative(c, Input::Material)?;
+            if c > Self::MAX_COEFFICIENT {
+                return Err(Error::OutOfRange(Input::Material));
+            }
+        }
         Ok(())
     }
 
@@ -59,6 +86,8 @@ impl Material {
             restitution: scalar::max(a.restitution, b.restitution),
             static_friction: scalar::sqrt(a.static_friction * b.static_friction),
             kinetic_friction: scalar::sqrt(a.kinetic_friction * b.kinetic_friction),
+            rolling_resistance: scalar::max(a.rolling_resistance, b.rolling_resistance),
+            twist_friction: scalar::max(a.twist_friction, b.twist_friction),
         }
     }
 }
@@ -242,6 +271,9 @@ pub(crate) struct Body<'a> {
     pub torque: Vec3,
     /// Inverse mass (1/kg); 0 for static and kinematic bodies.
     pub inv_mass: f32,
+    /// How the mass was given: inverse mass, inertia and centre of mass are derived from
+    /// it and the shape (also when a snapshot is restored).
+    pub mass: MassSpec,
     /// Inverse inertia about the centre of mass, body axes.
     pub inv_inertia_local: Mat3,
     /// `R I⁻¹ Rᵀ`, refreshed whenever the rotation changes.
@@ -259,14 +291,26 @@ pub(crate) struct Body<'a> {
     pub user_data: u64,
     /// Pose at the start of the current step (for continuous collision).
     pub pose0: Iso,
-    /// Movement bounds of the current step.
-    pub bounds: Aabb,
+    /// The broad phase's enlarged box (world, m): it holds the body's movement bounds
+    /// over the step; a body whose movement leaves it gets a new one and looks for new
+    /// candidate pairs. Static bodies have their exact box.
+    pub fat: Aabb,
+    /// Set when `fat` was replaced (or the body was added or teleported): the broad phase
+    /// looks for the body's new pairs and clears it.
+    pub moved: bool,
 }
 
 impl<'a> Body<'a> {
     /// Validate a description and derive mass properties.
     pub fn from_desc(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
         crate::error::position(d.pose.position)?;
+        Self::from_desc_anywhere(d)
+    }
+
+    /// [`Body::from_desc`] without the position range check (snapshot restore, whose
+    /// bodies may have travelled beyond it). The position must still be finite.
+    pub fn from_desc_anywhere(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
+        finite_vec(d.pose.position, Input::Position)?;
         if !d.pose.rotation.is_finite() {
             return Err(Error::NonFinite(Input::Rotation));
         }
@@ -327,6 +371,12 @@ impl<'a> Body<'a> {
             force: Vec3::ZERO,
             torque: Vec3::ZERO,
             inv_mass,
+            // Only a dynamic body's mass means anything; the others keep a canonical 0.
+            mass: if d.kind == BodyKind::Dynamic {
+                d.mass
+            } else {
+                MassSpec::Density(0.0)
+            },
             inv_inertia_local,
             inv_inertia_world: Mat3::ZERO,
             material: d.material,
@@ -340,7 +390,8 @@ impl<'a> Body<'a> {
             sleep_time: 0.0,
             user_data: d.user_data,
             pose0: pose,
-            bounds: d.shape.aabb(&pose),
+            fat: d.shape.aabb(&pose),
+            moved: true,
         };
         b.update_inertia();
         Ok(b)
@@ -383,61 +434,9 @@ impl<'a> Body<'a> {
         }
     }
 
-    /// Stage 1: `v += dt (g + F/m)`, `ω += dt I⁻¹ τ`, then damping `v /= 1 + dt c`,
-    /// then the speed limits. Forces are cleared afterwards.
-    pub fn integrate_velocity(&mut self, cfg: &WorldConfig, dt: f32) {
-        if self.kind == BodyKind::Static || !self.awake {
-            self.force = Vec3::ZERO;
-            self.torque = Vec3::ZERO;
-            return;
-        }
-        if self.is_dynamic() {
-            let a = cfg.gravity + self.force * self.inv_mass;
-            self.linear_velocity += a * dt;
-            self.angular_velocity += self.inv_inertia_world.mul_vec(self.torque) * dt;
-            self.linear_velocity *= 1.0 / (1.0 + dt * self.linear_damping);
-            self.angular_velocity *= 1.0 / (1.0 + dt * self.angular_damping);
-        }
-        // Speed limits for dynamic and kinematic bodies alike.
-        self.linear_velocity = clamp_length(self.linear_velocity, cfg.max_linear_speed);
-        self.angular_velocity = clamp_length(self.angular_velocity, cfg.max_angular_speed);
-        self.force = Vec3::ZERO;
-        self.torque = Vec3::ZERO;
-    }
-
-    /// Stage 8: move the centre of mass by `v dt` and turn by `ω dt`
-    /// (`q += ½ ω q dt`, normalised), keeping the centre of mass where it belongs.
-    pub fn integrate_position(&mut self, dt: f32) {
-        if self.kind == BodyKind::Static || !self.awake {
-            return;
-        }
-        let c = self.world_center() + self.linear_velocity * dt;
-        let q = self.pose.rotation.integrate(self.angular_velocity, dt);
-        self.pose = Iso::new(c - q.rotate(self.center_local), q);
-        self.update_inertia();
-    }
-
     /// Move the body so its centre of mass is at `c` with rotation `q` (projection, CCD).
     pub fn set_center_pose(&mut self, c: Vec3, q: Quat) {
         self.pose = Iso::new(c - q.rotate(self.center_local), q);
         self.update_inertia();
-    }
-}
-
-/// `v` shortened to at most `max` (m/s or rad/s). A vector too large to square in `f32`
-/// is first scaled down by its largest component; one that overflowed to infinity (a
-/// force beyond `f32`) stops: zero is the documented answer.
-#[inline]
-fn clamp_length(v: Vec3, max: f32) -> Vec3 {
-    if !v.is_finite() {
-        return Vec3::ZERO;
-    }
-    let big = v.abs().max_elem();
-    let v = if big > max { v * (max / big) } else { v };
-    let l2 = v.length_squared();
-    if l2 > max * max {
-        v * (max / scalar::sqrt(l2))
-    } else {
-        v
     }
 }

@@ -1,7 +1,7 @@
-//! Stage 9: continuous collision for bodies that moved far in one sub-step.
+//! Stage 8: continuous collision for bodies that moved far in one step.
 //!
 //! After the positions are integrated, a body is *fast* when it has `ccd` on, is dynamic
-//! and awake, and its sweep this sub-step,
+//! and awake, and its sweep this step,
 //!
 //! ```text
 //! |x₁ − x₀| + |ω| h R            (m; x the body origin, R its bounding radius)
@@ -9,8 +9,10 @@
 //!
 //! exceeds `ccd_motion_fraction · min_extent`: it may have jumped over something thinner
 //! than itself. Fast bodies are taken in slot order. Each is swept from its pose at the
-//! start of the sub-step (`pose0`) to its pose now with [`time_of_impact_unchecked`]
-//! against every other body of the candidate pairs it is in; the other body moves over
+//! start of the step (`pose0`) to its pose now with [`time_of_impact_unchecked`]
+//! against every other body it has a contact with (or, when a contact turned it out of
+//! its enlarged box this step, every body whose box its path touches, so a ball knocked
+//! sideways by another still meets the wall it now heads for); the other body moves over
 //! the same interval from its own `pose0` to its pose now (a static body stays put, a
 //! fast body is swept too: fast against fast). Of the hits, the earliest is taken: the
 //! fast body goes back to its pose at that time (`Motion::pose_at`), and, when the other
@@ -19,9 +21,10 @@
 //! stops them before they touch.
 //!
 //! The sweep models the motion as the body origin moving at the constant velocity
-//! `(x₁ − x₀) / h` while turning at `ω`. It starts and ends exactly where the integrator
-//! does; in between it differs from the integrator's path (which moves the centre of mass
-//! in a straight line) by at most the off-centre distance times the small turn.
+//! `(x₁ − x₀) / h` (h = dt) while turning at the final `ω`. It starts where the step
+//! started and its position ends where the sub-steps did; its rotation differs from the
+//! sub-steps' by what contacts changed of `ω` within the step, and its path from theirs
+//! (which move the centre of mass) by at most the off-centre distance times the turn.
 //!
 //! # Which hits count
 //!
@@ -29,7 +32,7 @@
 //!   with a gap of `slop/2` to `slop`, so projection has nothing to push and the gap is
 //!   well inside the speculative margin (`4 · slop` by default) that the next narrow phase
 //!   keeps contacts within.
-//! - A pair already within the tolerance (or overlapping) at the start of the sub-step is
+//! - A pair already within the tolerance (or overlapping) at the start of the step is
 //!   left to the discrete contact, which already exists for it: stopping there would pin
 //!   a fast body that slides along the ground.
 //! - A hit counts only when the motion left after it would carry the bodies more than
@@ -45,7 +48,11 @@
 //! turn, from `pose0` to where it now is; that sweep finds the contact at the end of its
 //! motion or nothing, and counts as one more sweep.
 
+use heapless::Vec as HVec;
+
 use super::body::{Body, BodyKind};
+use super::broad_phase::may_pair;
+use super::contact::Contact;
 use super::events::StepReport;
 use super::pool::Pool;
 use super::solver::is_active;
@@ -58,11 +65,15 @@ use crate::shape::Shape;
 /// impact needs a positive one.
 pub(crate) const MIN_TOLERANCE: f32 = 1.0e-4;
 
-/// Sweep fast bodies against what their movement bounds touched; move them back to the
-/// time of impact (module docs).
-pub(crate) fn sweep_fast_bodies<const N: usize>(
+/// Sweep fast bodies against the bodies they have contacts with; move them back to the
+/// time of impact (module docs). `scratch` lists `(fast slot, contact index)` so each
+/// fast body visits only its own contacts. A body whose path left its enlarged box (a
+/// contact turned it this step), or whose entries did not fit in `scratch`, is swept
+/// against every body whose box its path touches instead.
+pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
     bodies: &mut Pool<Body<'_>, N>,
-    pairs: &[(u32, u32)],
+    contacts: &[Contact],
+    scratch: &mut HVec<(u32, u32), P>,
     cfg: &WorldConfig,
     h: f32,
     report: &mut StepReport,
@@ -70,18 +81,75 @@ pub(crate) fn sweep_fast_bodies<const N: usize>(
     if h.is_nan() || h <= 0.0 {
         return;
     }
+    let mut fast = [false; N];
+    let mut any = false;
+    for (i, b) in bodies.iter() {
+        if fast_motion(b, cfg, h).is_some() {
+            if let Some(f) = fast.get_mut(i) {
+                *f = true;
+                any = true;
+            }
+        }
+    }
+    if !any {
+        return;
+    }
+    scratch.clear();
+    let mut overflow = [false; N];
+    for (ci, c) in contacts.iter().enumerate() {
+        for s in [c.a, c.b] {
+            if fast.get(s as usize).copied().unwrap_or(false)
+                && scratch.push((s, ci as u32)).is_err()
+            {
+                if let Some(o) = overflow.get_mut(s as usize) {
+                    *o = true;
+                }
+            }
+        }
+    }
+    // Unique entries: an unstable sort is deterministic.
+    scratch.sort_unstable();
     let tolerance = scalar::max(cfg.slop, MIN_TOLERANCE);
+    let mut at = 0usize;
     for i in 0..bodies.high() {
-        let Some(fast) = bodies.at(i).copied() else {
+        let start = at;
+        while scratch.get(at).is_some_and(|e| e.0 as usize == i) {
+            at += 1;
+        }
+        if !fast.get(i).copied().unwrap_or(false) {
+            continue;
+        }
+        let Some(body) = bodies.at(i).copied() else {
             continue;
         };
-        let Some(motion) = fast_motion(&fast, cfg, h) else {
+        // A partner moved back by an earlier fast body may no longer be fast.
+        let Some(motion) = fast_motion(&body, cfg, h) else {
             continue;
         };
         report.ccd_sweeps = report.ccd_sweeps.saturating_add(1);
-        if let Some((time, other)) =
-            earliest_hit(&fast, &motion, i as u32, bodies, pairs, cfg, h, tolerance)
-        {
+        let mine = scratch.get(start..at).unwrap_or(&[]);
+        let partner = |e: &(u32, u32)| {
+            contacts
+                .get(e.1 as usize)
+                .map(|c| if c.a == i as u32 { c.b } else { c.a })
+        };
+        // Its path this step: if a contact turned it out of its enlarged box, it may
+        // reach bodies it has no contact with; then every body whose box the path
+        // touches is a candidate.
+        let path = body
+            .shape
+            .aabb(&body.pose0)
+            .union(&body.shape.aabb(&body.pose));
+        let escaped = overflow.get(i).copied().unwrap_or(false) || !body.fat.contains(&path);
+        let hit = if escaped {
+            let near = |s: &usize| bodies.at(*s).is_some_and(|o| o.fat.overlaps(&path));
+            let all = (0..bodies.high()).filter(near).map(|s| s as u32);
+            earliest_hit(&body, &motion, i as u32, bodies, all, cfg, h, tolerance)
+        } else {
+            let listed = mine.iter().filter_map(partner);
+            earliest_hit(&body, &motion, i as u32, bodies, listed, cfg, h, tolerance)
+        };
+        if let Some((time, other)) = hit {
             report.ccd_hits = report.ccd_hits.saturating_add(1);
             if let Some(b) = bodies.at_mut(i) {
                 move_to(b, &motion.pose_at(time));
@@ -95,7 +163,7 @@ pub(crate) fn sweep_fast_bodies<const N: usize>(
     }
 }
 
-/// The motion of a body over the sub-step: from `pose0`, the origin at constant velocity
+/// The motion of a body over the step: from `pose0`, the origin at constant velocity
 /// `(x₁ − x₀) / h`, turning at `ω`. Static bodies stand still.
 fn motion_of(b: &Body<'_>, h: f32) -> Motion {
     if !b.awake || b.kind == BodyKind::Static {
@@ -112,7 +180,7 @@ fn motion_of(b: &Body<'_>, h: f32) -> Motion {
     }
 }
 
-/// The body's motion if it is fast this sub-step (module docs), else `None`.
+/// The body's motion if it is fast this step (module docs), else `None`.
 fn fast_motion(b: &Body<'_>, cfg: &WorldConfig, h: f32) -> Option<Motion> {
     if !b.ccd || !is_active(b) {
         return None;
@@ -140,7 +208,7 @@ fn earliest_hit<const N: usize>(
     motion: &Motion,
     i: u32,
     bodies: &Pool<Body<'_>, N>,
-    pairs: &[(u32, u32)],
+    others: impl Iterator<Item = u32>,
     cfg: &WorldConfig,
     h: f32,
     tolerance: f32,
@@ -149,18 +217,14 @@ fn earliest_hit<const N: usize>(
         return None;
     }
     let mut best: Option<(f32, u32)> = None;
-    for &(pa, pb) in pairs {
-        let other = if pa == i {
-            pb
-        } else if pb == i {
-            pa
-        } else {
+    for other in others {
+        if other == i {
             continue;
-        };
+        }
         let Some(o) = bodies.at(other as usize) else {
             continue;
         };
-        if o.sensor {
+        if o.sensor || !may_pair(fast, o) {
             continue;
         }
         let other_motion = motion_of(o, h);

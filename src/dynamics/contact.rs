@@ -1,60 +1,83 @@
-//! Stages 5 and 6: narrow phase over the candidate pairs, and the persistent contact
-//! cache (points matched by feature id, warm-start impulses carried over, begin/end and
-//! sensor events).
+//! Stages 5 and 6: the narrow phase over the persistent contacts, and the contact cache
+//! (manifolds reused while a pair barely moves, points matched by feature id, warm-start
+//! impulses carried over, begin/end, sensor and hit events).
 //!
-//! # The cache
+//! # Contacts
 //!
-//! `contacts` holds last step's contacts sorted by `(a, b)`; the broad phase hands over
-//! this step's candidate pairs sorted the same way. One merge walk over both lists builds
-//! the new list (in `scratch`, then swapped in), so every decision is made in key order:
+//! A contact exists for every pair of bodies whose broad-phase boxes (`Body::fat`)
+//! overlap and that may collide (`broad_phase::may_collide`): the broad phase inserts
+//! new pairs with [`insert_pairs`], and [`update_contacts`] removes a contact once the
+//! boxes separate. A contact holds a manifold of 0 to 4 points; one with no point is a
+//! pair that is near but apart. `contacts` stays sorted by `(a, b)`, so every decision
+//! is made in key order, and nothing is ever swapped or copied wholesale: new pairs are
+//! merged in place from the back, and removal compacts in place.
 //!
-//! | last step | this step's pairs | result |
-//! | --- | --- | --- |
-//! | contact | pair, manifold | new contact, points matched to the old ones |
-//! | contact | pair, no manifold | contact ends |
-//! | contact | no pair, neither body awake | old contact kept unchanged (warm start survives sleep) |
-//! | contact | no pair otherwise | contact ends (bounds apart, or pair dropped) |
-//! | none | pair, manifold | new contact |
+//! | pair this step | result |
+//! | --- | --- |
+//! | a body is gone, or the boxes no longer overlap | contact removed (end event if it touched) |
+//! | neither body awake (or one asleep, the other static) | kept unchanged: the warm start survives sleep |
+//! | otherwise | manifold reused or rebuilt, impulses carried over |
 //!
-//! A point is matched to last step's points of the same pair by its feature-id key first
+//! # Manifold reuse
+//!
+//! The narrow phase keeps points up to `margin = speculative_margin + dt · w` apart,
+//! with `w = |v_b − v_a| + |ω_a| R_a + |ω_b| R_b` the fastest the two surfaces can close
+//! (R the shapes' bounding radii), so a pair that closes fast gets its speculative point
+//! a step early and the solver stops it at the surface: speculative continuous
+//! collision (Catto, GDC 2013). It is part of continuous collision: when no dynamic body
+//! of the pair has `ccd` on, `w` is 0 and fast bodies may tunnel. A full narrow phase stores the relative pose `b_in_a` it ran at and the
+//! margin it used, `margin + REUSE_SLACK`. While the relative pose has moved by
+//! `drift = |Δt| + 2 sin(θ/2) R_b ≤ REUSE_SLACK` (θ the angle of the relative turn; no
+//! point of B moved more than that in A's frame) and `margin + drift ≤ built margin`,
+//! the manifold is reused:
+//! its points are the same two surface points fixed in the two bodies, so their
+//! separation along the normal (fixed in A's frame) is recomputed exactly from the
+//! current poses, `s = (p_b − p_a) · n`, and no point of the shapes can have come closer
+//! than the margin without being there before. Resting stacks rebuild almost never
+//! (rapier's contact recycling works the same way).
+//!
+//! # Warm start
+//!
+//! A rebuilt manifold's points are matched to the old ones by feature-id key first
 //! (Catto, Box2D `b2UpdateContact`); a point whose id matches nothing takes the nearest
 //! unmatched old point whose anchors both moved less than `2 · slop` in their body frames.
 //! A matched point inherits the accumulated normal and friction impulses (the friction
-//! impulse projected onto the new tangent plane) and the sticking flag.
+//! impulse projected onto the new tangent plane) and the sticking flag. A reused
+//! manifold keeps its points, impulses and flags as they are.
 //!
 //! # Touching and events
 //!
 //! A contact is *touching* when some point has `separation <= slop`: penetrating points,
-//! points resting at the slop that projection leaves, and points within one slop of the
-//! surface (so a resting contact whose gap jitters by rounding does not flicker). Points
-//! further out are speculative: the solver uses them, events ignore them.
+//! points resting at the slop, and points within one slop of the surface (so a resting
+//! contact whose gap jitters by rounding does not flicker). Points further out are
+//! speculative: the solver uses them, events ignore them.
 //!
 //! Events, in key order: `ContactBegin` / `SensorEnter` when a contact starts touching,
-//! `ContactEnd` / `SensorLeave` when a touching contact stops touching or disappears. Then,
-//! again in key order, one `Hit` per non-sensor contact that is *new* (no contact for the
-//! pair last step) or starts touching, when its fastest point closes faster than
-//! `hit_event_speed`: the closing speed `(v_a(p) − v_b(p))·n` at the midpoint `p` of the
-//! two anchors, with the velocities before the solve. Counting new speculative contacts
-//! matters: the solver stops a body at a speculative contact before it touches, so by the
-//! time it touches its closing speed is gone.
+//! `ContactEnd` / `SensorLeave` when a touching contact stops touching or is removed.
+//! Then, again in key order, one `Hit` per non-sensor contact whose manifold appears
+//! (no point last step) or that starts touching, when its fastest point closes faster
+//! than `hit_event_speed`: the closing speed `(v_a(p) − v_b(p))·n` at the midpoint `p`
+//! of the two anchors, with the velocities before the solve. Counting speculative
+//! manifolds matters: the solver stops a body at a speculative point before it touches,
+//! so by the time it touches its closing speed is gone.
 //!
 //! # Capacity
 //!
-//! When `contacts` is full, the contacts first in key order are kept and the rest are
-//! counted in `StepReport::dropped_contacts`; a dropped contact counts as no contact
-//! (a touching one sends its end event). `pairs` never exceeds the pool, so this only
-//! happens when contacts kept for sleeping bodies add to this step's pairs.
+//! New pairs that do not fit in `contacts` are dropped, the last in key order first, and
+//! counted in `StepReport::dropped_contacts`; their bodies are flagged `moved` so the
+//! broad phase offers the pairs again next step.
 
 use heapless::Vec as HVec;
 
 use crate::collide::{contact_unchecked, Manifold};
-use crate::config::WorldConfig;
+use crate::config::{WorldConfig, REUSE_SLACK};
 use crate::dynamics::body::{Body, Material};
+use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
 use crate::dynamics::pool::Pool;
-use crate::math::Vec3;
+use crate::math::{scalar, Iso, Vec3};
 
-/// One persistent contact point with its accumulated impulses and solver scratch.
+/// One persistent contact point with its accumulated impulses.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ContactPoint {
     /// `ContactId::key()` of the features that produced it.
@@ -65,22 +88,13 @@ pub(crate) struct ContactPoint {
     pub local_b: Vec3,
     /// Separation along the normal at the narrow phase (m), negative when penetrating.
     pub separation: f32,
-    /// Accumulated normal impulse (N·s), ≥ 0.
+    /// Accumulated normal impulse of one sub-step (N·s), ≥ 0.
     pub normal_impulse: f32,
-    /// Accumulated friction impulse (N·s, world vector in the tangent plane).
+    /// Accumulated friction impulse of one sub-step (N·s, world vector in the tangent
+    /// plane).
     pub tangent_impulse: Vec3,
-    /// Solver scratch: lever arms from the centres of mass (world, m).
-    pub r_a: Vec3,
-    /// Lever arm on B.
-    pub r_b: Vec3,
-    /// Effective mass along the normal (kg).
-    pub normal_mass: f32,
-    /// Effective masses along the two tangents (kg).
-    pub tangent_mass: [f32; 2],
-    /// Target normal velocity from restitution (m/s, ≥ 0).
-    pub restitution_velocity: f32,
     /// Normal closing speed before the solve (m/s; positive when approaching), at the
-    /// midpoint of the two anchors; set by the narrow phase (the solver may refresh it).
+    /// midpoint of the two anchors, for hit events.
     pub approach_speed: f32,
     /// True while the contact sticks (static friction).
     pub sticking: bool,
@@ -93,11 +107,11 @@ pub(crate) struct Contact {
     pub a: u32,
     /// Slot of body B.
     pub b: u32,
-    /// Unit normal from A to B (world).
+    /// Unit normal from A to B (world), as of this step.
     pub normal: Vec3,
-    /// Tangent basis (world), refreshed each step.
-    pub tangents: [Vec3; 2],
-    /// Points in use.
+    /// The normal in A's body frame: it turns with A while the manifold is reused.
+    pub normal_local: Vec3,
+    /// Points in use (0 while the shapes are apart).
     pub len: u8,
     /// The points.
     pub points: [ContactPoint; 4],
@@ -107,161 +121,320 @@ pub(crate) struct Contact {
     pub sensor: bool,
     /// Touching this step (some point with `separation <= slop`): drives begin/end events.
     pub touching: bool,
+    /// B's pose in A's frame when the manifold was last built.
+    pub built_pose: Iso,
+    /// Margin (m) the manifold was last built with; negative: never built, build now.
+    pub built_margin: f32,
+    /// Scratch of one update: a hit event is due (see the module docs).
+    pub hit_due: bool,
 }
 
 impl Contact {
     /// Sort and match key: `(a, b)` packed.
     #[inline]
     pub fn key(&self) -> u64 {
-        ((self.a as u64) << 32) | self.b as u64
+        pair_key((self.a, self.b))
+    }
+
+    /// A contact for a new pair: no points, never built.
+    pub fn new_pair(a: u32, b: u32, material: Material, sensor: bool) -> Contact {
+        Contact {
+            a,
+            b,
+            material,
+            sensor,
+            built_margin: -1.0,
+            ..Contact::default()
+        }
+    }
+
+    /// The points in use.
+    #[inline]
+    pub fn points(&self) -> &[ContactPoint] {
+        self.points.get(..usize::from(self.len)).unwrap_or(&[])
     }
 }
 
-/// Stages 5 and 6: a manifold for every candidate pair, matched against last step's
-/// contacts to carry their impulses over; begin/end/sensor/hit events (see the module
-/// docs for every rule).
-///
-/// `contacts` (last step's, sorted by key) is replaced by this step's, sorted by key;
-/// `scratch` is left holding last step's. `pairs` must be sorted and hold distinct
-/// `(lower slot, higher slot)` pairs. `report.contacts` and `report.points` describe the
-/// new list; `report.dropped_contacts` accumulates over the sub-steps of a step.
-#[allow(clippy::too_many_arguments)]
+/// The contact key of a pair, as [`Contact::key`].
+#[inline]
+pub(crate) fn pair_key((a, b): (u32, u32)) -> u64 {
+    ((a as u64) << 32) | b as u64
+}
+
+/// True when `contacts` (sorted by key) holds the pair.
+pub(crate) fn contains_pair(contacts: &[Contact], pair: (u32, u32)) -> bool {
+    let key = pair_key(pair);
+    contacts.binary_search_by(|c| c.key().cmp(&key)).is_ok()
+}
+
+/// Merge `pairs` (sorted by key, distinct, none already in `contacts`) into `contacts`
+/// as new contacts with no points, keeping the order. Pairs beyond the capacity are
+/// dropped from the end (the highest keys), counted in `report.dropped_contacts`, and their
+/// bodies flagged `moved` so the broad phase offers them again.
+pub(crate) fn insert_pairs<const N: usize, const C: usize>(
+    contacts: &mut HVec<Contact, C>,
+    pairs: &[(u32, u32)],
+    bodies: &mut Pool<Body<'_>, N>,
+    report: &mut StepReport,
+) {
+    let room = C - contacts.len();
+    let (kept, dropped) = pairs.split_at(pairs.len().min(room));
+    for &(a, b) in dropped {
+        for s in [a, b] {
+            if let Some(body) = bodies.at_mut(s as usize) {
+                body.moved = true;
+            }
+        }
+    }
+    report.dropped_contacts = report
+        .dropped_contacts
+        .saturating_add(dropped.len().min(u32::MAX as usize) as u32);
+    if kept.is_empty() {
+        return;
+    }
+    // Grow by `kept.len()` placeholders, then merge from the back: the largest of the two
+    // tails goes to the last free position. Each position is written once.
+    let old_len = contacts.len();
+    for _ in 0..kept.len() {
+        // Cannot fail: `kept.len() <= room`.
+        let _ = contacts.push(Contact::default());
+    }
+    let slots = contacts.as_mut_slice();
+    let mut old_at = old_len; // one past the next old contact to place
+    let mut new_at = kept.len(); // one past the next new pair to place
+    for write in (0..slots.len()).rev() {
+        let pair = if new_at > 0 {
+            kept.get(new_at - 1)
+        } else {
+            None
+        };
+        let old_key = if old_at > 0 {
+            slots.get(old_at - 1).map(Contact::key)
+        } else {
+            None
+        };
+        let take_new = match (pair, old_key) {
+            (Some(p), Some(k)) => pair_key(*p) > k,
+            (Some(_), None) => true,
+            (None, _) => false,
+        };
+        let next = if take_new {
+            new_at -= 1;
+            let Some(&(a, b)) = pair else { break };
+            new_contact(a, b, bodies)
+        } else {
+            old_at -= 1;
+            match slots.get(old_at) {
+                Some(c) => *c,
+                None => break,
+            }
+        };
+        if let Some(dst) = slots.get_mut(write) {
+            *dst = next;
+        }
+        if new_at == 0 {
+            // The old contacts below `write` are already in place.
+            break;
+        }
+    }
+}
+
+/// A new, empty contact for the pair `a < b`, with their combined material.
+fn new_contact<const N: usize>(a: u32, b: u32, bodies: &Pool<Body<'_>, N>) -> Contact {
+    match (bodies.at(a as usize), bodies.at(b as usize)) {
+        (Some(x), Some(y)) => Contact::new_pair(
+            a,
+            b,
+            Material::combine(&x.material, &y.material),
+            x.sensor || y.sensor,
+        ),
+        _ => Contact::new_pair(a, b, Material::DEFAULT, false),
+    }
+}
+
+/// Stages 5 and 6 over every contact, in key order (see the module docs for every rule):
+/// remove contacts whose boxes separated, reuse or rebuild the manifolds of pairs with an
+/// awake body, keep sleeping ones, carry impulses over; then begin/end/sensor events and
+/// hit events. `report.pairs` counts the pairs the narrow phase examined,
+/// `report.contacts` and `report.points` the manifolds and points that result.
 pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     contacts: &mut HVec<Contact, C>,
-    scratch: &mut HVec<Contact, C>,
-    pairs: &[(u32, u32)],
     bodies: &Pool<Body<'_>, N>,
     cfg: &WorldConfig,
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
-    scratch.clear();
-    let mut dropped: u32 = 0;
-    let mut old_at = 0;
-    let mut pair_at = 0;
-    // Each round moves at least one cursor on, so this many rounds end the walk.
-    for _ in 0..=contacts.len() + pairs.len() {
-        let old = contacts.get(old_at);
-        let pair = pairs.get(pair_at).copied();
-        let (old, pair) = match (old, pair) {
-            (None, None) => break,
-            (Some(o), Some(p)) if o.key() == pair_key(p) => (Some(o), Some(p)),
-            (Some(o), Some(p)) if o.key() < pair_key(p) => (Some(o), None),
-            (Some(_), Some(p)) | (None, Some(p)) => (None, Some(p)),
-            (Some(o), None) => (Some(o), None),
+    let mut write = 0usize;
+    let len = contacts.len();
+    let mut tested = 0u32;
+    for read in 0..len {
+        let Some(old) = contacts.get(read).copied() else {
+            break;
         };
-        old_at += usize::from(old.is_some());
-        pair_at += usize::from(pair.is_some());
-        let next = match pair {
-            Some((a, b)) => narrow_phase(a, b, old, bodies, cfg),
-            None => old.filter(|o| both_asleep(o, bodies)).copied(),
-        };
-        let kept = match next {
-            Some(c) if scratch.push(c).is_ok() => Some(c),
-            Some(_) => {
-                dropped = dropped.saturating_add(1);
-                None
+        let next = update_one(&old, bodies, cfg, &mut tested);
+        touch_events(&old, next.as_ref(), bodies, events, report);
+        if let Some(c) = next {
+            if let Some(dst) = contacts.get_mut(write) {
+                *dst = c;
             }
-            None => None,
-        };
-        touch_events(old, kept.as_ref(), bodies, events, report);
+            write += 1;
+        }
     }
-    core::mem::swap(contacts, scratch);
-    hit_events(contacts, scratch, bodies, cfg, events, report);
-    report.contacts = contacts.len() as u32;
-    report.points = contacts
-        .iter()
-        .fold(0u32, |n, c| n.saturating_add(u32::from(c.len)));
-    report.dropped_contacts = report.dropped_contacts.saturating_add(dropped);
-}
-
-/// The contact key of a pair, as [`Contact::key`].
-#[inline]
-fn pair_key((a, b): (u32, u32)) -> u64 {
-    ((a as u64) << 32) | b as u64
-}
-
-/// True when neither body of `c` is awake (both live): the broad phase skipped the pair,
-/// and the contact is kept as it was.
-fn both_asleep<const N: usize>(c: &Contact, bodies: &Pool<Body<'_>, N>) -> bool {
-    match (bodies.at(c.a as usize), bodies.at(c.b as usize)) {
-        (Some(a), Some(b)) => !a.awake && !b.awake,
-        _ => false,
+    contacts.truncate(write);
+    hit_events(contacts, bodies, cfg, events, report);
+    report.pairs = tested;
+    report.contacts = 0;
+    report.points = 0;
+    for c in contacts.iter().filter(|c| c.len > 0) {
+        report.contacts = report.contacts.saturating_add(1);
+        report.points = report.points.saturating_add(u32::from(c.len));
     }
 }
 
-/// Stage 5 for one pair, then the warm start from `old` (same pair, last step).
-/// `None` when the shapes are further apart than the speculative margin, or when the
-/// narrow phase answers something non-finite (never let a NaN reach the solver).
-fn narrow_phase<const N: usize>(
-    a: u32,
-    b: u32,
-    old: Option<&Contact>,
+/// One contact's update: `None` when it ends.
+fn update_one<const N: usize>(
+    old: &Contact,
     bodies: &Pool<Body<'_>, N>,
     cfg: &WorldConfig,
+    tested: &mut u32,
 ) -> Option<Contact> {
-    let body_a = bodies.at(a as usize)?;
-    let body_b = bodies.at(b as usize)?;
+    let body_a = bodies.at(old.a as usize)?;
+    let body_b = bodies.at(old.b as usize)?;
+    if !body_a.fat.overlaps(&body_b.fat) {
+        return None;
+    }
+    if !may_collide(body_a, body_b) {
+        // Two sleepers, or a sleeper on a static body: nothing moved, keep it.
+        let mut kept = *old;
+        kept.hit_due = false;
+        return Some(kept);
+    }
+    *tested = tested.saturating_add(1);
+    let mut c = narrow_phase(old, body_a, body_b, cfg);
+    c.hit_due = !c.sensor && c.len > 0 && (old.len == 0 || (c.touching && !old.touching));
+    Some(c)
+}
+
+/// The fastest the surfaces of `a` and `b` can close (m/s): `|v_b − v_a| + |ω_a| R_a +
+/// |ω_b| R_b`.
+#[inline]
+fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
+    (b.linear_velocity - a.linear_velocity).length()
+        + a.angular_velocity.length() * a.shape.bounding_radius()
+        + b.angular_velocity.length() * b.shape.bounding_radius()
+}
+
+/// Stage 5 for one pair: reuse the manifold of `old` when the pair barely moved, else
+/// build a new one and carry the impulses over (module docs).
+fn narrow_phase(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> Contact {
+    let swept = |b: &Body<'_>| b.ccd && b.kind == crate::BodyKind::Dynamic;
+    let reach = if swept(body_a) || swept(body_b) {
+        cfg.dt * closing_bound(body_a, body_b)
+    } else {
+        0.0
+    };
+    let margin = cfg.speculative_margin + reach;
+    let b_in_a = body_a.pose.inv_mul(&body_b.pose);
+    if old.built_margin >= 0.0 {
+        let drift = relative_drift(&old.built_pose, &b_in_a, body_b.shape.bounding_radius());
+        if drift <= REUSE_SLACK && margin + drift <= old.built_margin {
+            return reused(old, body_a, body_b, cfg);
+        }
+    }
+    let built_margin = margin + REUSE_SLACK;
     let manifold = contact_unchecked(
         &body_a.shape,
         &body_a.pose,
         &body_b.shape,
         &body_b.pose,
-        cfg.speculative_margin,
-    )?;
-    let mut c = contact_from_manifold(a, b, &manifold, body_a, body_b, cfg)?;
-    if let Some(old) = old {
-        warm_start(&mut c, old, cfg.slop);
+        built_margin,
+    );
+    let mut c = Contact {
+        normal: Vec3::ZERO,
+        normal_local: Vec3::ZERO,
+        len: 0,
+        points: [ContactPoint::default(); 4],
+        touching: false,
+        built_pose: b_in_a,
+        built_margin,
+        ..*old
+    };
+    if let Some(m) = manifold {
+        if !fill_from_manifold(&mut c, &m, body_a, body_b, cfg) {
+            // Something non-finite (coordinates near f32::MAX): no points, rebuild next step.
+            c.len = 0;
+            c.touching = false;
+            c.built_margin = -1.0;
+        } else {
+            warm_start(&mut c, old, cfg.slop);
+        }
     }
-    Some(c)
+    c
 }
 
-/// A fresh contact (no impulses) from a manifold: world normal and tangent basis,
-/// body-frame anchors, closing speeds, combined material, sensor and touching flags.
-fn contact_from_manifold(
-    a: u32,
-    b: u32,
+/// An upper bound (m) on how far any point of B (within `radius_b` of B's origin) moved
+/// in A's frame between the relative poses `from` and `to`: `|Δt| + 2 sin(θ/2) radius_b`,
+/// the translation plus the chord a turn by θ moves a point at `radius_b`; `sin(θ/2)` is
+/// the length of the vector part of the relative turn `Δq = q_from⁻¹ q_to`.
+#[inline]
+fn relative_drift(from: &Iso, to: &Iso, radius_b: f32) -> f32 {
+    let dq = from.rotation.conjugate() * to.rotation;
+    let sin_half = scalar::sqrt(dq.xyz().length_squared());
+    (to.position - from.position).length() + 2.0 * sin_half * radius_b
+}
+
+/// `old`'s manifold at the current poses: same points and impulses, separations and the
+/// world normal recomputed (module docs).
+fn reused(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> Contact {
+    let mut c = *old;
+    let n = body_a.pose.transform_vector(c.normal_local);
+    c.normal = n;
+    c.touching = false;
+    let len = usize::from(c.len);
+    for p in c.points.iter_mut().take(len) {
+        let p_a = body_a.pose.transform_point(p.local_a);
+        let p_b = body_b.pose.transform_point(p.local_b);
+        p.separation = (p_b - p_a).dot(n);
+        let mid = (p_a + p_b) * 0.5;
+        p.approach_speed = (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(n);
+        c.touching |= p.separation <= cfg.slop;
+    }
+    c
+}
+
+/// Fill `c` (no points yet) from a manifold: world and local normal, body-frame anchors,
+/// closing speeds, touching flag. False when the manifold holds something non-finite.
+fn fill_from_manifold(
+    c: &mut Contact,
     m: &Manifold,
     body_a: &Body<'_>,
     body_b: &Body<'_>,
     cfg: &WorldConfig,
-) -> Option<Contact> {
+) -> bool {
     let normal = m.normal;
-    if m.points().is_empty() || !normal.is_finite() {
-        return None;
+    if !normal.is_finite() {
+        return false;
     }
-    // A right-handed orthonormal basis (t1, t2, n), the same for the same normal bits.
-    let t1 = normal.any_perpendicular();
-    let t2 = normal.cross(t1);
-    let mut c = Contact {
-        a,
-        b,
-        normal,
-        tangents: [t1, t2],
-        len: 0,
-        points: [ContactPoint::default(); 4],
-        material: Material::combine(&body_a.material, &body_b.material),
-        sensor: body_a.sensor || body_b.sensor,
-        touching: false,
-    };
+    c.normal = normal;
+    c.normal_local = body_a.pose.inverse_transform_vector(normal);
     for (dst, src) in c.points.iter_mut().zip(m.points()) {
         if !(src.separation.is_finite() && src.local_a.is_finite() && src.local_b.is_finite()) {
-            return None;
+            return false;
         }
         // The shape frame is the body frame, so the manifold's local anchors are ours.
-        let p = (src.point_a + src.point_b) * 0.5;
+        let mid = (src.point_a + src.point_b) * 0.5;
         *dst = ContactPoint {
             id: src.id.key(),
             local_a: src.local_a,
             local_b: src.local_b,
             separation: src.separation,
-            approach_speed: (body_a.velocity_at(p) - body_b.velocity_at(p)).dot(normal),
+            approach_speed: (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(normal),
             ..ContactPoint::default()
         };
         c.len += 1;
         c.touching |= src.separation <= cfg.slop;
     }
-    Some(c)
+    true
 }
 
 /// Carry accumulated impulses and the sticking flag from `old` (the same pair, last step)
@@ -269,10 +442,7 @@ fn contact_from_manifold(
 /// `2 · slop` for points whose id matched nothing. Each old point is used at most once.
 fn warm_start(c: &mut Contact, old: &Contact, slop: f32) {
     let normal = c.normal;
-    let old_points = old
-        .points
-        .get(..usize::from(old.len))
-        .unwrap_or(&old.points);
+    let old_points = old.points();
     let len = usize::from(c.len);
     let new_points = c.points.get_mut(..len).unwrap_or(&mut []);
     let mut used = [false; 4];
@@ -297,7 +467,7 @@ fn warm_start(c: &mut Contact, old: &Contact, slop: f32) {
         }
         let mut best: Option<(usize, f32)> = None;
         for (k, (q, taken)) in old_points.iter().zip(used.iter()).enumerate() {
-            let d2 = crate::math::scalar::max(
+            let d2 = scalar::max(
                 (p.local_a - q.local_a).length_squared(),
                 (p.local_b - q.local_b).length_squared(),
             );
@@ -324,22 +494,20 @@ fn inherit(p: &mut ContactPoint, q: &ContactPoint, normal: Vec3) {
 }
 
 /// Begin/end (or sensor enter/leave) when the touching state of the pair changes between
-/// `old` (last step) and `new` (kept this step).
+/// `old` (last step) and `new` (this step; `None` when the contact was removed).
 fn touch_events<const N: usize, const E: usize>(
-    old: Option<&Contact>,
+    old: &Contact,
     new: Option<&Contact>,
     bodies: &Pool<Body<'_>, N>,
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
-    let was = old.is_some_and(|c| c.touching);
+    let was = old.touching;
     let is = new.is_some_and(|c| c.touching);
-    let Some(c) = new.or(old) else {
-        return;
-    };
     if was == is {
         return;
     }
+    let c = new.unwrap_or(old);
     let (Some(a), Some(b)) = (
         bodies.handle_at(c.a as usize),
         bodies.handle_at(c.b as usize),
@@ -363,28 +531,16 @@ fn touch_events<const N: usize, const E: usize>(
     push_event(events, report, event);
 }
 
-/// One `Hit` per non-sensor contact of `new` that has no contact in `old` or starts
-/// touching, when its fastest point closes faster than `cfg.hit_event_speed`. Both lists
-/// are sorted by key; events come in key order.
+/// One `Hit` per contact flagged `hit_due` whose fastest point closes faster than
+/// `cfg.hit_event_speed`, in key order.
 fn hit_events<const N: usize, const E: usize>(
-    new: &[Contact],
-    old: &[Contact],
+    contacts: &[Contact],
     bodies: &Pool<Body<'_>, N>,
     cfg: &WorldConfig,
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
-    let mut old_at = 0;
-    for c in new {
-        // Skip old contacts with smaller keys; the cursor only moves forward.
-        while old.get(old_at).is_some_and(|o| o.key() < c.key()) {
-            old_at += 1;
-        }
-        let previous = old.get(old_at).filter(|o| o.key() == c.key());
-        let began = previous.is_none_or(|o| c.touching && !o.touching);
-        if !began || c.sensor {
-            continue;
-        }
+    for c in contacts.iter().filter(|c| c.hit_due) {
         let Some(fastest) = fastest_point(c) else {
             continue;
         };
@@ -416,9 +572,8 @@ fn hit_events<const N: usize, const E: usize>(
 
 /// The point of `c` with the largest closing speed (the first on ties).
 fn fastest_point(c: &Contact) -> Option<&ContactPoint> {
-    let points = c.points.get(..usize::from(c.len)).unwrap_or(&c.points);
     let mut best: Option<&ContactPoint> = None;
-    for p in points {
+    for p in c.points() {
         if best.is_none_or(|b| p.approach_speed > b.approach_speed) {
             best = Some(p);
         }
@@ -480,95 +635,6 @@ mod tests {
         assert_eq!(new.points[0].tangent_impulse, Vec3::new(2.0, 0.0, 0.0));
     }
 
-    /// A ball resting on a box, through the real narrow phase: a second update with the
-    /// ball awake matches its point by id and keeps the impulses; with the ball asleep
-    /// (pair not tested) the contact is kept bit for bit; a removed pair ends it.
-    #[test]
-    fn cache_carries_impulses_and_keeps_sleeping_contacts() {
-        use crate::dynamics::body::BodyDesc;
-        use crate::shape::Shape;
-        let cfg = WorldConfig::DEFAULT;
-        let mut bodies: Pool<Body<'static>, 2> = Pool::new();
-        let ground = Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap();
-        let ball = Shape::sphere(0.5).unwrap();
-        bodies
-            .insert(
-                Body::from_desc(&BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
-                    .unwrap(),
-            )
-            .unwrap();
-        let ball_h = bodies
-            .insert(
-                Body::from_desc(&BodyDesc::dynamic(ball).position(Vec3::new(0.0, 0.499, 0.0)))
-                    .unwrap(),
-            )
-            .unwrap();
-        let mut contacts: HVec<Contact, 4> = HVec::new();
-        let mut scratch: HVec<Contact, 4> = HVec::new();
-        let mut events: HVec<Event, 8> = HVec::new();
-        let mut report = StepReport::default();
-        let pairs = [(0u32, 1u32)];
-        update_contacts(
-            &mut contacts,
-            &mut scratch,
-            &pairs,
-            &bodies,
-            &cfg,
-            &mut events,
-            &mut report,
-        );
-        assert_eq!(contacts.len(), 1);
-        assert!(contacts[0].touching);
-        assert_eq!(events.len(), 1);
-        // The solver's accumulated impulses.
-        contacts[0].points[0].normal_impulse = 1.25;
-        contacts[0].points[0].tangent_impulse = Vec3::new(0.5, 0.0, 0.0);
-        let solved = contacts[0];
-        update_contacts(
-            &mut contacts,
-            &mut scratch,
-            &pairs,
-            &bodies,
-            &cfg,
-            &mut events,
-            &mut report,
-        );
-        assert_eq!(contacts[0].points[0].normal_impulse, 1.25);
-        assert_eq!(
-            contacts[0].points[0].tangent_impulse,
-            Vec3::new(0.5, 0.0, 0.0)
-        );
-        assert_eq!(events.len(), 1, "no new event while touching");
-        // Asleep: the broad phase hands over no pair; the contact stays as it was.
-        bodies.get_mut(ball_h).unwrap().awake = false;
-        contacts[0] = solved;
-        update_contacts(
-            &mut contacts,
-            &mut scratch,
-            &[],
-            &bodies,
-            &cfg,
-            &mut events,
-            &mut report,
-        );
-        assert_eq!(contacts.as_slice(), &[solved]);
-        assert_eq!((report.contacts, report.points), (1, 1));
-        // Awake again, and out of reach: the contact ends with one event.
-        bodies.get_mut(ball_h).unwrap().awake = true;
-        update_contacts(
-            &mut contacts,
-            &mut scratch,
-            &[],
-            &bodies,
-            &cfg,
-            &mut events,
-            &mut report,
-        );
-        assert!(contacts.is_empty());
-        let a = bodies.handle_at(0).unwrap();
-        assert_eq!(events.last(), Some(&Event::ContactEnd { a, b: ball_h }));
-    }
-
     /// Anchors must be near on both bodies: a point that slid 1 cm on B is not matched.
     #[test]
     fn fallback_needs_both_anchors_close() {
@@ -579,5 +645,77 @@ mod tests {
         let mut near = contact(&[point(5, Vec3::ZERO, Vec3::new(0.0, 0.0, 0.0099), 0.0)]);
         warm_start(&mut near, &old, 0.005);
         assert_eq!(near.points[0].normal_impulse, 4.0);
+    }
+
+    /// New pairs merge into the sorted list in place; beyond the capacity the highest keys
+    /// are dropped, counted, and their bodies flagged to retry.
+    #[test]
+    fn insert_pairs_merges_in_order_and_drops_the_highest_keys() {
+        use crate::dynamics::body::BodyDesc;
+        use crate::shape::Shape;
+        let mut bodies: Pool<Body<'static>, 8> = Pool::new();
+        for i in 0..8 {
+            let d = BodyDesc::dynamic(Shape::sphere(0.5).unwrap())
+                .position(Vec3::new(i as f32, 0.0, 0.0));
+            let mut b = Body::from_desc(&d).unwrap();
+            b.moved = false;
+            bodies.insert(b).unwrap();
+        }
+        let mut contacts: HVec<Contact, 6> = HVec::new();
+        let mut report = StepReport::default();
+        insert_pairs(&mut contacts, &[(0, 3), (2, 5)], &mut bodies, &mut report);
+        contacts[0].len = 2; // mark the old ones
+        contacts[1].len = 2;
+        insert_pairs(
+            &mut contacts,
+            &[(0, 1), (1, 2), (2, 6), (3, 4), (6, 7)],
+            &mut bodies,
+            &mut report,
+        );
+        let keys: std::vec::Vec<(u32, u32, u8)> =
+            contacts.iter().map(|c| (c.a, c.b, c.len)).collect();
+        assert_eq!(
+            keys,
+            [
+                (0, 1, 0),
+                (0, 3, 2),
+                (1, 2, 0),
+                (2, 5, 2),
+                (2, 6, 0),
+                (3, 4, 0)
+            ]
+        );
+        assert_eq!(report.dropped_contacts, 1);
+        let moved: std::vec::Vec<bool> = (0..8).map(|i| bodies.at(i).unwrap().moved).collect();
+        assert_eq!(
+            moved,
+            [false, false, false, false, false, false, true, true]
+        );
+        assert!(contains_pair(&contacts, (2, 6)) && !contains_pair(&contacts, (6, 7)));
+    }
+
+    /// The drift bound holds for random relative moves: every point within the radius
+    /// moves by at most the bound.
+    #[test]
+    fn relative_drift_bounds_point_motion() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for _ in 0..2000 {
+            let from = Iso::new(rng.unit_vector() * rng.range(0.0, 2.0), rng.rotation());
+            let turn = crate::math::Quat::from_axis_angle(
+                rng.unit_vector(),
+                rng.range(0.0, core::f32::consts::PI),
+            );
+            let to = Iso::new(
+                from.position + rng.unit_vector() * rng.range(0.0, 0.1),
+                (turn * from.rotation).normalize(),
+            );
+            let r = rng.range(0.1, 2.0);
+            let bound = relative_drift(&from, &to, r);
+            for _ in 0..8 {
+                let p = rng.unit_vector() * r;
+                let moved = to.transform_point(p).distance(from.transform_point(p));
+                assert!(moved <= bound * 1.0001 + 1e-6, "{moved} > {bound}");
+            }
+        }
     }
 }

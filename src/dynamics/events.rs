@@ -1,8 +1,8 @@
 //! Events of a step and the step report.
 //!
-//! Events are queued in a bounded buffer in the order the step produces them: for each
-//! sub-step, begin/end and sensor events in pair order `(lower slot, higher slot)`, then
-//! hit events in the same order. The queue is emptied at the start of every step. When it
+//! Events are queued in a bounded buffer in the order the step produces them: begin/end
+//! and sensor events in pair order `(lower slot, higher slot)`, then hit events in the
+//! same order. The queue is emptied at the start of every step. When it
 //! is full, later events of the step are dropped and counted in
 //! [`StepReport::dropped_events`].
 //!
@@ -72,23 +72,26 @@ pub enum Event {
 pub struct StepReport {
     /// Awake dynamic bodies after the step.
     pub awake_bodies: u32,
-    /// Candidate pairs found by the broad phase (kept ones, last sub-step).
+    /// Pairs the narrow phase examined: pairs with overlapping broad-phase boxes and an
+    /// awake body (pairs of sleeping bodies keep their contact unexamined).
     pub pairs: u32,
-    /// Contacts (manifolds with at least one point) after the narrow phase, last
-    /// sub-step; includes contacts kept unchanged for sleeping bodies.
+    /// Contacts with at least one point (manifolds) after the narrow phase; includes
+    /// contacts kept unchanged for sleeping bodies.
     pub contacts: u32,
-    /// Contact points over all contacts (last sub-step).
+    /// Contact points over all contacts.
     pub points: u32,
     /// Bodies swept by continuous collision.
     pub ccd_sweeps: u32,
     /// Sweeps that found a time of impact and moved a body back.
     pub ccd_hits: u32,
-    /// Candidate pairs dropped because the pair buffer was full, summed over the
-    /// sub-steps (kept: the first found by the sweep, which visits bodies by increasing
-    /// lower x bound of their movement bounds, ties by slot).
+    /// New candidate pairs that did not fit in the step's pair buffer (`CONTACTS` long):
+    /// the ones found first by the sweep are kept (it visits bodies by increasing lower
+    /// x bound of their broad-phase boxes, ties by slot); the bodies of the others look
+    /// again next step.
     pub dropped_pairs: u32,
-    /// Manifolds dropped because the contact pool was full, summed over the sub-steps
-    /// (kept: the first in `(lower slot, higher slot)` order).
+    /// New pairs that did not fit in the contact pool: those with the lowest
+    /// `(lower slot, higher slot)` keys are kept; the bodies of the others look again
+    /// next step.
     pub dropped_contacts: u32,
     /// Events dropped because the event queue was full (kept: the first of the step).
     pub dropped_events: u32,

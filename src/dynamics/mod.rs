@@ -4,6 +4,7 @@ pub mod body;
 pub(crate) mod broad_phase;
 pub(crate) mod ccd;
 pub(crate) mod contact;
+pub(crate) mod contact_solver;
 pub mod events;
 pub(crate) mod pool;
 pub(crate) mod projection;

@@ -1,6 +1,6 @@
 //! Checksums and snapshots of the world's dynamic state.
 //!
-//! # Format (version 2)
+//! # Format (version 3)
 //! Little-endian throughout, no pointer-sized values:
 //!
 //! | bytes | field |
@@ -16,8 +16,10 @@
 //!
 //! The payload holds the configuration, the step counter, every body slot (generation,
 //! and for a used slot the whole body: shape, pose, velocities, mass, material, flags,
-//! sleep timer), the broad-phase order and the contact cache with its warm-start
-//! impulses. Floats are stored as their bit patterns with `-0.0` canonicalised to `+0.0`.
+//! sleep timer, broad-phase box) and the contact cache with its warm-start impulses and
+//! reuse state. What a body's description determines (mass, inertia, centre of mass) is
+//! derived again on restore, exactly as `World::add` derives it, never read; everything
+//! else is bounded, so any snapshot `restore` accepts steps to a finite state. Floats are stored as their bit patterns with `-0.0` canonicalised to `+0.0`.
 //! Hull shapes are stored as a fingerprint (FNV-1a 64 of the hull's data); `restore`
 //! finds the hull among those the target world's bodies already use (or those passed to
 //! [`World::restore_with_hulls`]).
@@ -28,16 +30,16 @@
 //! timer; for every contact its bodies, normal, and per point the feature id and the
 //! accumulated normal and friction impulses. Free slots never count.
 
-use super::body::{Body, BodyKind, Material};
+use super::body::{Body, BodyKind, MassSpec, Material};
 use super::contact::{Contact, ContactPoint};
 use crate::config::WorldConfig;
 use crate::error::{Error, SnapshotError};
-use crate::math::{Aabb, Iso, Mat3, Quat, Vec3};
+use crate::math::{Aabb, Iso, Quat, Vec3};
 use crate::shape::{Capsule, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle};
 use crate::World;
 
 /// Snapshot format version; bumped whenever the byte layout changes.
-pub const FORMAT_VERSION: u16 = 2;
+pub const FORMAT_VERSION: u16 = 3;
 
 const MAGIC: [u8; 8] = *b"CAROMSNP";
 const HEADER_LEN: usize = 8 + 2 + 1 + 1 + 12 + 4 + 8;
@@ -86,11 +88,6 @@ trait Sink {
     fn iso(&mut self, i: &Iso) {
         self.vec3(i.position);
         self.quat(i.rotation);
-    }
-    fn mat3(&mut self, m: &Mat3) {
-        self.vec3(m.x);
-        self.vec3(m.y);
-        self.vec3(m.z);
     }
 }
 
@@ -197,9 +194,6 @@ impl<'b> Reader<'b> {
     fn iso(&mut self) -> R<Iso> {
         Ok(Iso::new(self.vec3()?, self.quat()?))
     }
-    fn mat3(&mut self) -> R<Mat3> {
-        Ok(Mat3::from_cols(self.vec3()?, self.vec3()?, self.vec3()?))
-    }
 }
 
 /// Fingerprint of a hull: FNV-1a 64 over its vertices and face planes.
@@ -277,59 +271,92 @@ fn get_shape<'a>(
     })
 }
 
-fn put_config(s: &mut impl Sink, c: &WorldConfig) {
-    s.vec3(c.gravity);
-    s.f32(c.dt);
-    s.u32(c.substeps);
-    s.u32(c.velocity_iterations);
-    s.u32(c.position_iterations);
-    for v in [
-        c.restitution_threshold,
-        c.slop,
-        c.projection_factor,
-        c.max_projection,
-        c.speculative_margin,
-        c.stick_speed,
-        c.sleep_linear_speed,
-        c.sleep_angular_speed,
-        c.sleep_time,
-    ] {
-        s.f32(v);
-    }
-    s.u8(c.sleep_enabled as u8);
-    for v in [
-        c.ccd_motion_fraction,
-        c.hit_event_speed,
-        c.max_linear_speed,
-        c.max_angular_speed,
-    ] {
-        s.f32(v);
-    }
+/// The configuration's fields in declaration order: (floats, counts, flag).
+fn config_fields(c: &WorldConfig) -> ([f32; 21], [u32; 4], bool) {
+    (
+        [
+            c.gravity.x,
+            c.gravity.y,
+            c.gravity.z,
+            c.dt,
+            c.contact_hertz,
+            c.contact_damping_ratio,
+            c.max_push_speed,
+            c.restitution_threshold,
+            c.slop,
+            c.projection_factor,
+            c.max_projection,
+            c.speculative_margin,
+            c.aabb_margin,
+            c.stick_speed,
+            c.sleep_linear_speed,
+            c.sleep_angular_speed,
+            c.sleep_time,
+            c.ccd_motion_fraction,
+            c.hit_event_speed,
+            c.max_linear_speed,
+            c.max_angular_speed,
+        ],
+        [
+            c.substeps,
+            c.velocity_iterations,
+            c.relax_iterations,
+            c.position_iterations,
+        ],
+        c.sleep_enabled,
+    )
 }
 
+fn put_config(s: &mut impl Sink, c: &WorldConfig) {
+    let (floats, counts, flag) = config_fields(c);
+    for v in floats {
+        s.f32(v);
+    }
+    for n in counts {
+        s.u32(n);
+    }
+    s.u8(flag as u8);
+}
+
+/// A configuration read back; it must pass [`WorldConfig::validate`].
 fn get_config(r: &mut Reader<'_>) -> R<WorldConfig> {
-    let mut c = WorldConfig {
-        gravity: r.vec3()?,
-        dt: r.f32()?,
-        substeps: r.u32()?,
-        velocity_iterations: r.u32()?,
-        position_iterations: r.u32()?,
-        ..WorldConfig::DEFAULT
+    let mut f = [0.0f32; 21];
+    for v in f.iter_mut() {
+        *v = r.f32()?;
+    }
+    let mut n = [0u32; 4];
+    for v in n.iter_mut() {
+        *v = r.u32()?;
+    }
+    let [gx, gy, gz, dt, contact_hertz, contact_damping_ratio, max_push_speed, restitution_threshold, slop, projection_factor, max_projection, speculative_margin, aabb_margin, stick_speed, sleep_linear_speed, sleep_angular_speed, sleep_time, ccd_motion_fraction, hit_event_speed, max_linear_speed, max_angular_speed] =
+        f;
+    let [substeps, velocity_iterations, relax_iterations, position_iterations] = n;
+    let c = WorldConfig {
+        gravity: Vec3::new(gx, gy, gz),
+        dt,
+        substeps,
+        velocity_iterations,
+        relax_iterations,
+        contact_hertz,
+        contact_damping_ratio,
+        max_push_speed,
+        position_iterations,
+        restitution_threshold,
+        slop,
+        projection_factor,
+        max_projection,
+        speculative_margin,
+        aabb_margin,
+        stick_speed,
+        sleep_linear_speed,
+        sleep_angular_speed,
+        sleep_time,
+        sleep_enabled: r.bool()?,
+        ccd_motion_fraction,
+        hit_event_speed,
+        max_linear_speed,
+        max_angular_speed,
     };
-    c.restitution_threshold = r.f32()?;
-    c.slop = r.f32()?;
-    c.projection_factor = r.f32()?;
-    c.max_projection = r.f32()?;
-    c.speculative_margin = r.f32()?;
-    c.stick_speed = r.f32()?;
-    c.sleep_linear_speed = r.f32()?;
-    c.sleep_angular_speed = r.f32()?;
-    c.sleep_time = r.f32()?;
-    c.sleep_enabled = r.bool()?;
-    c.ccd_motion_fraction = r.f32()?;
-    c.hit_event_speed = r.f32()?;
-    c.max_linear_speed = r.f32()?;
-    c.max_angular_speed = r.f32()?;
     c.validate().map_err(|_| SnapshotError::Corrupt)?;
     Ok(c)
 }
@@ -338,6 +365,8 @@ fn put_material(s: &mut impl Sink, m: &Material) {
     s.f32(m.restitution);
     s.f32(m.static_friction);
     s.f32(m.kinetic_friction);
+    s.f32(m.rolling_resistance);
+    s.f32(m.twist_friction);
 }
 
 fn get_material(r: &mut Reader<'_>) -> R<Material> {
@@ -345,6 +374,8 @@ fn get_material(r: &mut Reader<'_>) -> R<Material> {
         restitution: r.f32()?,
         static_friction: r.f32()?,
         kinetic_friction: r.f32()?,
+        rolling_resistance: r.f32()?,
+        twist_friction: r.f32()?,
     };
     m.validate().map_err(|_| SnapshotError::Corrupt)?;
     Ok(m)
@@ -358,13 +389,20 @@ fn put_body(s: &mut impl Sink, b: &Body<'_>) {
         BodyKind::Kinematic => 2,
     });
     s.iso(&b.pose);
-    s.vec3(b.center_local);
     s.vec3(b.linear_velocity);
     s.vec3(b.angular_velocity);
     s.vec3(b.force);
     s.vec3(b.torque);
-    s.f32(b.inv_mass);
-    s.mat3(&b.inv_inertia_local);
+    match b.mass {
+        MassSpec::Density(d) => {
+            s.u8(0);
+            s.f32(d);
+        }
+        MassSpec::Mass(m) => {
+            s.u8(1);
+            s.f32(m);
+        }
+    }
     put_material(s, &b.material);
     s.f32(b.linear_damping);
     s.f32(b.angular_damping);
@@ -376,10 +414,26 @@ fn put_body(s: &mut impl Sink, b: &Body<'_>) {
     s.f32(b.sleep_time);
     s.u64(b.user_data);
     s.iso(&b.pose0);
-    s.vec3(b.bounds.min);
-    s.vec3(b.bounds.max);
+    s.vec3(b.fat.min);
+    s.vec3(b.fat.max);
+    s.u8(b.moved as u8);
 }
 
+/// Largest coordinate (m) a restored body may have. The API accepts positions within
+/// ±`MAX_COORDINATE` (10 km) and the step clamps speeds to `max_linear_speed`, so a
+/// simulated body passes 1e10 m only after months of falling; squares of such values
+/// still fit in `f32`, which a crafted 1e37 would not.
+pub const MAX_STATE_MAGNITUDE: f32 = 1.0e10;
+
+/// Largest force or torque (N, N·m) a restored body may carry into its next step.
+pub const MAX_STATE_FORCE: f32 = 1.0e30;
+
+/// A body read back. Everything a body's description determines (inverse mass, inertia,
+/// centre of mass, the world inertia) is derived again through [`Body::from_desc_anywhere`],
+/// exactly as `World::add` derives it, so a snapshot cannot carry a mass or an inertia
+/// the API could not produce; the rest is bounded: positions and boxes within
+/// [`MAX_STATE_MAGNITUDE`], forces within [`MAX_STATE_FORCE`], finite velocities (the
+/// step clamps them to the speed limits before using them), a non-negative sleep timer.
 fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>) -> R<Body<'a>> {
     let shape = get_shape(r, hulls)?;
     let kind = match r.u8()? {
@@ -388,18 +442,23 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
         2 => BodyKind::Kinematic,
         _ => return Err(SnapshotError::Corrupt),
     };
-    let mut b = Body {
+    let pose = r.iso()?;
+    let linear_velocity = r.vec3()?;
+    let angular_velocity = r.vec3()?;
+    let force = r.vec3()?;
+    let torque = r.vec3()?;
+    let mass = match r.u8()? {
+        0 => MassSpec::Density(r.f32()?),
+        1 => MassSpec::Mass(r.f32()?),
+        _ => return Err(SnapshotError::Corrupt),
+    };
+    let desc = crate::BodyDesc {
         shape,
         kind,
-        pose: r.iso()?,
-        center_local: r.vec3()?,
-        linear_velocity: r.vec3()?,
-        angular_velocity: r.vec3()?,
-        force: r.vec3()?,
-        torque: r.vec3()?,
-        inv_mass: r.f32()?,
-        inv_inertia_local: r.mat3()?,
-        inv_inertia_world: Mat3::ZERO,
+        pose,
+        linear_velocity,
+        angular_velocity,
+        mass,
         material: get_material(r)?,
         linear_damping: r.f32()?,
         angular_damping: r.f32()?,
@@ -407,31 +466,16 @@ fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull
         mask: r.u32()?,
         sensor: r.bool()?,
         ccd: r.bool()?,
-        awake: r.bool()?,
-        sleep_time: r.f32()?,
-        user_data: r.u64()?,
-        pose0: r.iso()?,
-        bounds: Aabb::new(r.vec3()?, r.vec3()?),
+        user_data: 0,
     };
-    check_body(&b)?;
-    // Derived, never stored: `R I⁻¹ Rᵀ` from the rotation, exactly as the step computes it.
-    b.update_inertia();
-    Ok(b)
-}
-
-/// Largest coordinate (m) a restored body may have. The API
-/// accepts positions within ±`MAX_COORDINATE` (10 km) and the step clamps speeds to
-/// `max_linear_speed`, so a simulated body passes 1e10 m only after months of falling;
-/// squares of such values still fit in `f32`, which a crafted 1e37 would not. (Speeds
-/// need no bound: the step clamps them before they are used.)
-pub const MAX_STATE_MAGNITUDE: f32 = 1.0e10;
-
-/// What a body read from a snapshot must satisfy to be a state the API could produce:
-/// static shapes on static bodies only, an inverse mass that is positive exactly for
-/// dynamic bodies, an inverse inertia that is symmetric positive semi-definite (checked
-/// on its diagonal and 2×2 minors), a centre of mass inside the shape, non-negative
-/// damping and sleep timer, and a static body at rest.
-fn check_body(b: &Body<'_>) -> R<()> {
+    let awake = r.bool()?;
+    let sleep_time = r.f32()?;
+    let user_data = r.u64()?;
+    let pose0 = r.iso()?;
+    let fat = Aabb::new(r.vec3()?, r.vec3()?);
+    let moved = r.bool()?;
+    let mut b = Body::from_desc_anywhere(&crate::BodyDesc { user_data, ..desc })
+        .map_err(|_| SnapshotError::Corrupt)?;
     let ok = |c: bool| {
         if c {
             Ok(())
@@ -439,38 +483,42 @@ fn check_body(b: &Body<'_>) -> R<()> {
             Err(SnapshotError::Corrupt)
         }
     };
-    let m = &b.inv_inertia_local;
-    let d = m.diagonal();
-    match b.kind {
-        BodyKind::Dynamic => {
-            ok(!b.shape.is_static_only())?;
-            ok(b.inv_mass > 0.0)?;
-            ok(d.x >= 0.0 && d.y >= 0.0 && d.z >= 0.0)?;
-            ok(m.x.y == m.y.x && m.x.z == m.z.x && m.y.z == m.z.y)?;
-            ok(m.x.y * m.x.y <= d.x * d.y
-                && m.x.z * m.x.z <= d.x * d.z
-                && m.y.z * m.y.z <= d.y * d.z)?;
-            // The centre of mass lies inside the shape.
-            let reach = b.shape.bounding_radius();
-            ok(b.center_local.length() <= reach + reach * 1.0e-4)?;
-        }
-        BodyKind::Static | BodyKind::Kinematic => {
-            ok(b.inv_mass == 0.0 && m.max_abs() == 0.0 && b.center_local == Vec3::ZERO)?;
-        }
-    }
-    if b.kind == BodyKind::Static {
-        ok(b.linear_velocity == Vec3::ZERO && b.angular_velocity == Vec3::ZERO)?;
-    }
-    ok(b.linear_damping >= 0.0 && b.angular_damping >= 0.0 && b.sleep_time >= 0.0)?;
-    // Positions and speeds a simulation can reach (see `MAX_STATE_MAGNITUDE`).
     let small = |v: Vec3| v.abs().max_elem() <= MAX_STATE_MAGNITUDE;
-    ok(small(b.pose.position) && small(b.pose0.position))?;
-    ok(b.bounds.is_valid())
+    ok(small(pose.position) && small(pose0.position))?;
+    // A box holds the body and a step of its motion: allow it twice the position bound.
+    let box_small = |v: Vec3| v.abs().max_elem() <= 2.0 * MAX_STATE_MAGNITUDE;
+    ok(fat.is_valid() && box_small(fat.min) && box_small(fat.max))?;
+    ok(force.abs().max_elem() <= MAX_STATE_FORCE && torque.abs().max_elem() <= MAX_STATE_FORCE)?;
+    ok(sleep_time >= 0.0)?;
+    // The stored rotation, bit for bit, unless it is off unit length by more than the
+    // step's own normalisation leaves (then normalised once: the result is kept next time).
+    b.pose = Iso::new(pose.position, settle_rotation(pose.rotation));
+    b.update_inertia();
+    b.pose0 = Iso::new(pose0.position, settle_rotation(pose0.rotation));
+    b.fat = fat;
+    b.moved = moved;
+    b.sleep_time = sleep_time;
+    b.awake = awake && kind != BodyKind::Static;
+    if kind == BodyKind::Dynamic {
+        b.force = force;
+        b.torque = torque;
+    }
+    Ok(b)
+}
+
+/// Largest `| |q|² − 1 |` of a rotation kept as stored; `Quat::normalize` leaves less.
+const SETTLED_ROTATION: f32 = 1.0e-6;
+
+/// `q` when it is unit to within [`SETTLED_ROTATION`], else `q` normalised.
+fn settle_rotation(q: Quat) -> Quat {
+    if crate::math::scalar::abs(q.length_squared() - 1.0) <= SETTLED_ROTATION {
+        q
+    } else {
+        q.normalize()
+    }
 }
 
 fn put_point(s: &mut impl Sink, p: &ContactPoint) {
-    // Solver scratch (lever arms, effective masses, targets) is rebuilt by the next
-    // step's prepare, so only the persistent part is stored.
     s.u64(p.id);
     s.vec3(p.local_a);
     s.vec3(p.local_b);
@@ -480,8 +528,11 @@ fn put_point(s: &mut impl Sink, p: &ContactPoint) {
     s.u8(p.sticking as u8);
 }
 
+/// A contact point read back: finite, anchors within [`MAX_STATE_MAGNITUDE`], a
+/// non-negative normal impulse. (The solver bounds what it warm-starts with, so no finite
+/// impulse can push a body to a non-finite speed.)
 fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
-    Ok(ContactPoint {
+    let p = ContactPoint {
         id: r.u64()?,
         local_a: r.vec3()?,
         local_b: r.vec3()?,
@@ -490,46 +541,79 @@ fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
         tangent_impulse: r.vec3()?,
         sticking: r.bool()?,
         ..ContactPoint::default()
-    })
+    };
+    let small = |v: Vec3| v.abs().max_elem() <= MAX_STATE_MAGNITUDE;
+    let ok = small(p.local_a)
+        && small(p.local_b)
+        && crate::math::scalar::abs(p.separation) <= MAX_STATE_MAGNITUDE
+        && p.normal_impulse >= 0.0;
+    if ok {
+        Ok(p)
+    } else {
+        Err(SnapshotError::Corrupt)
+    }
 }
 
 fn put_contact(s: &mut impl Sink, c: &Contact) {
     s.u32(c.a);
     s.u32(c.b);
     s.vec3(c.normal);
-    s.vec3(c.tangents[0]);
-    s.vec3(c.tangents[1]);
+    s.vec3(c.normal_local);
     s.u8(c.len);
-    for p in c.points.iter().take(c.len as usize) {
+    for p in c.points() {
         put_point(s, p);
     }
     put_material(s, &c.material);
     s.u8(c.sensor as u8);
     s.u8(c.touching as u8);
+    s.iso(&c.built_pose);
+    s.f32(c.built_margin);
+}
+
+/// A unit vector, or zero (a contact that never had points).
+fn unit_or_zero(v: Vec3) -> bool {
+    v == Vec3::ZERO || crate::math::scalar::abs(v.length_squared() - 1.0) <= 1.0e-3
 }
 
 fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
     let (a, b) = (r.u32()?, r.u32()?);
     let normal = r.vec3()?;
-    let tangents = [r.vec3()?, r.vec3()?];
+    let normal_local = r.vec3()?;
     let len = r.u8()?;
-    if len as usize > 4 || a >= b {
+    if len as usize > 4 || a >= b || !unit_or_zero(normal) || !unit_or_zero(normal_local) {
         return Err(SnapshotError::Corrupt);
     }
     let mut points = [ContactPoint::default(); 4];
     for p in points.iter_mut().take(len as usize) {
         *p = get_point(r)?;
     }
+    let material = get_material(r)?;
+    let sensor = r.bool()?;
+    let touching = r.bool()?;
+    let built_pose = r.iso()?;
+    let built_margin = r.f32()?;
+    if built_pose.position.abs().max_elem() > MAX_STATE_MAGNITUDE
+        || built_margin > MAX_STATE_MAGNITUDE
+    {
+        return Err(SnapshotError::Corrupt);
+    }
     Ok(Contact {
         a,
         b,
         normal,
-        tangents,
+        normal_local,
         len,
         points,
-        material: get_material(r)?,
-        sensor: r.bool()?,
-        touching: r.bool()?,
+        material,
+        sensor,
+        touching,
+        built_pose,
+        built_margin: if built_margin < 0.0 {
+            -1.0
+        } else {
+            built_margin
+        },
+        hit_due: false,
     })
 }
 
@@ -583,10 +667,6 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
                 None => s.u8(0),
             }
         }
-        s.u32(self.broad.order.len() as u32);
-        for slot in self.broad.order.iter() {
-            s.u32(*slot);
-        }
         s.u32(self.contacts.len() as u32);
         for c in self.contacts.iter() {
             put_contact(s, c);
@@ -623,7 +703,6 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             + config.0
             + 8 // step counter
             + 4 + BODIES * (4 + 1 + body.0) // slots: generation, used flag, body
-            + 4 + BODIES * 4 // broad-phase order
             + 4 + CONTACTS * contact.0
     }
 
@@ -726,27 +805,9 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
                 self.bodies.set_slot(i, generation, body);
             }
         }
-        let n_order = r.u32()? as usize;
-        if n_order > BODIES {
-            return Err(SnapshotError::Corrupt);
-        }
         if apply {
+            // The sweep order is derived: the broad phase sorts the live slots again.
             self.broad.order.clear();
-        }
-        // The order must be a permutation of live slots: each at most once.
-        let mut seen = [false; BODIES];
-        for _ in 0..n_order {
-            let slot = r.u32()? as usize;
-            let fresh = seen
-                .get_mut(slot)
-                .is_some_and(|s| !core::mem::replace(s, true));
-            if !live.get(slot).copied().unwrap_or(false) || !fresh {
-                return Err(SnapshotError::Corrupt);
-            }
-            let slot = slot as u32;
-            if apply && self.broad.order.push(slot).is_err() {
-                return Err(SnapshotError::Corrupt);
-            }
         }
         let n_contacts = r.u32()? as usize;
         if n_contacts > CONTACTS {
@@ -777,34 +838,28 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
 /// A stage of the step, for [`StepTrace`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
-    /// 1: gravity, forces, damping.
-    IntegrateVelocities = 0,
-    /// 2–3: movement bounds and candidate pairs.
-    BroadPhase = 1,
+    /// 1–3: movement bounds, enlarged boxes and new candidate pairs.
+    BroadPhase = 0,
     /// 4–6: manifolds and the contact cache.
-    NarrowPhase = 2,
-    /// 7: velocity solve.
-    Solve = 3,
-    /// 8: position integration.
-    IntegratePositions = 4,
-    /// 9: continuous collision.
-    Continuous = 5,
-    /// 10: projection.
-    Projection = 6,
-    /// 11: sleep.
-    Sleep = 7,
+    NarrowPhase = 1,
+    /// 7: the soft step (velocities, contacts, positions, restitution).
+    Solve = 2,
+    /// 8: continuous collision.
+    Continuous = 3,
+    /// 9: projection.
+    Projection = 4,
+    /// 10: sleep.
+    Sleep = 5,
 }
 
 impl Stage {
     /// Number of stages traced.
-    pub const COUNT: usize = 8;
+    pub const COUNT: usize = 6;
     /// All stages, in step order.
     pub const ALL: [Stage; Stage::COUNT] = [
-        Stage::IntegrateVelocities,
         Stage::BroadPhase,
         Stage::NarrowPhase,
         Stage::Solve,
-        Stage::IntegratePositions,
         Stage::Continuous,
         Stage::Projection,
         Stage::Sleep,
@@ -880,9 +935,10 @@ fn check_header<const B: usize, const C: usize, const E: usize>(buf: &[u8]) -> R
     }
     let len = r.u32()? as usize;
     let sum = r.u64()?;
-    let payload = buf
-        .get(HEADER_LEN..HEADER_LEN + len)
+    let end = HEADER_LEN
+        .checked_add(len)
         .ok_or(SnapshotError::Truncated)?;
+    let payload = buf.get(HEADER_LEN..end).ok_or(SnapshotError::Truncated)?;
     let mut f = Fnv::new();
     f.put(payload);
     if f.0 != sum {

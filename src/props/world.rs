@@ -790,6 +790,10 @@ impl<'h> Run<'h> {
                 self.accepted = true;
                 check(config_finite(&c), "set_config: accepted a non-finite field")?;
                 check(
+                    config_within_documented_bounds(&c),
+                    "set_config: accepted a field outside its documented bounds",
+                )?;
+                check(
                     *self.world.config() == c,
                     "set_config: config not taken as given",
                 )
@@ -1173,14 +1177,15 @@ fn body_sound(b: &crate::BodyRef<'_, '_>) -> Result<(), Violation> {
     )
 }
 
-/// A material the world must refuse: restitution outside `[0, 1]`, a friction negative,
-/// or anything non-finite.
+/// A material the world must refuse: restitution outside `[0, 1]`, a friction, rolling
+/// or twist coefficient outside `[0, 100]`, or anything non-finite.
 fn material_bad(m: &Material) -> bool {
+    let coefficient = |c: f32| (0.0..=Material::MAX_COEFFICIENT).contains(&c);
     !((0.0..=1.0).contains(&m.restitution)
-        && m.static_friction.is_finite()
-        && m.static_friction >= 0.0
-        && m.kinetic_friction.is_finite()
-        && m.kinetic_friction >= 0.0)
+        && coefficient(m.static_friction)
+        && coefficient(m.kinetic_friction)
+        && coefficient(m.rolling_resistance)
+        && coefficient(m.twist_friction))
 }
 
 /// `|x| <=` [`WORLD_WORKING_RANGE`] (false for NaN).
@@ -1221,50 +1226,71 @@ fn op_in_range(op: &WorldOp) -> bool {
     }
 }
 
+/// The float fields of `c`, in declaration order.
+fn config_floats(c: &WorldConfig) -> [f32; 21] {
+    [
+        c.gravity.x,
+        c.gravity.y,
+        c.gravity.z,
+        c.dt,
+        c.contact_hertz,
+        c.contact_damping_ratio,
+        c.max_push_speed,
+        c.restitution_threshold,
+        c.slop,
+        c.projection_factor,
+        c.max_projection,
+        c.speculative_margin,
+        c.aabb_margin,
+        c.stick_speed,
+        c.sleep_linear_speed,
+        c.sleep_angular_speed,
+        c.sleep_time,
+        c.ccd_motion_fraction,
+        c.hit_event_speed,
+        c.max_linear_speed,
+        c.max_angular_speed,
+    ]
+}
+
 /// Every float field of `c` is in the working range and `dt <=` [`WORLD_MAX_DT`].
 fn config_in_range(c: &WorldConfig) -> bool {
-    tame_vec(c.gravity)
-        && c.dt <= WORLD_MAX_DT
-        && [
-            c.restitution_threshold,
-            c.slop,
-            c.projection_factor,
-            c.max_projection,
-            c.speculative_margin,
-            c.stick_speed,
-            c.sleep_linear_speed,
-            c.sleep_angular_speed,
-            c.sleep_time,
-            c.ccd_motion_fraction,
-            c.hit_event_speed,
-            c.max_linear_speed,
-            c.max_angular_speed,
-        ]
-        .iter()
-        .all(|x| tame(*x))
+    c.dt <= WORLD_MAX_DT && config_floats(c).iter().all(|x| tame(*x))
 }
 
 /// True when every float field of `c` is finite.
 fn config_finite(c: &WorldConfig) -> bool {
-    c.gravity.is_finite()
-        && [
-            c.dt,
-            c.restitution_threshold,
-            c.slop,
-            c.projection_factor,
-            c.max_projection,
-            c.speculative_margin,
-            c.stick_speed,
-            c.sleep_linear_speed,
-            c.sleep_angular_speed,
-            c.sleep_time,
-            c.ccd_motion_fraction,
-            c.hit_event_speed,
-            c.max_linear_speed,
-            c.max_angular_speed,
-        ]
-        .iter()
-        .all(|x| x.is_finite())
+    config_floats(c).iter().all(|x| x.is_finite())
+}
+
+/// The documented bounds of `WorldConfig` (its field docs), restated here independently
+/// of `WorldConfig::validate`: what an accepted configuration must satisfy.
+fn config_within_documented_bounds(c: &WorldConfig) -> bool {
+    let r = |x: f32, lo: f32, hi: f32| x.is_finite() && (lo..=hi).contains(&x);
+    let g = c.gravity;
+    [g.x, g.y, g.z].iter().all(|x| r(*x, -1000.0, 1000.0))
+        && r(c.dt, 1.0e-5, 1.0)
+        && (1..=64).contains(&c.substeps)
+        && (1..=64).contains(&c.velocity_iterations)
+        && (1..=64).contains(&c.relax_iterations)
+        && (0..=64).contains(&c.position_iterations)
+        && r(c.contact_hertz, 0.1, 1000.0)
+        && r(c.contact_damping_ratio, 0.0, 1000.0)
+        && r(c.max_push_speed, 0.0, 100.0)
+        && r(c.restitution_threshold, 0.0, 1000.0)
+        && r(c.slop, 0.0, 0.1)
+        && r(c.projection_factor, 0.0, 1.0)
+        && r(c.max_projection, 0.0, 10.0)
+        && r(c.speculative_margin, 0.0, 10.0)
+        && r(c.aabb_margin, 0.0, 10.0)
+        && r(c.stick_speed, 0.0, 100.0)
+        && r(c.sleep_linear_speed, 0.0, 100.0)
+        && r(c.sleep_angular_speed, 0.0, 100.0)
+        && r(c.sleep_time, 0.0, 1.0e6)
+        && r(c.ccd_motion_fraction, 1.0e-3, 100.0)
+        && r(c.hit_event_speed, 0.0, 1.0e4)
+        && r(c.max_linear_speed, 1.0e-3, 1.0e4)
+        && r(c.max_angular_speed, 1.0e-3, 1.0e4)
 }
 
 /// FNV-1a 64 (Fowler, Noll, Vo), the hash of the snapshot header, written here
@@ -1316,6 +1342,7 @@ pub fn snapshot_fixture(hull: &ConvexHull) -> Result<OpsWorld<'_>, Error> {
                 restitution: 0.4,
                 static_friction: 0.8,
                 kinetic_friction: 0.5,
+                ..Material::DEFAULT
             }),
     )?;
     w.add(

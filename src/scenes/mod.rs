@@ -334,6 +334,7 @@ pub fn bullet<'a, const B: usize, const C: usize, const E: usize>(
                 restitution: 0.0,
                 static_friction: 0.0,
                 kinetic_friction: 0.0,
+                ..Material::DEFAULT
             }),
     )
 }
@@ -383,6 +384,7 @@ pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
             restitution: rng.range(0.0, 0.6),
             static_friction: rng.range(0.3, 0.9),
             kinetic_friction: rng.range(0.1, 0.3),
+            ..Material::DEFAULT
         };
         let p = Vec3::new(
             (x as f32 - 2.5) * 1.1 + rng.range(-0.1, 0.1),
@@ -466,6 +468,7 @@ pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
                 restitution: 0.5,
                 static_friction: 0.5,
                 kinetic_friction: 0.3,
+                ..Material::DEFAULT
             },
         ))?;
         first.get_or_insert(hnd);

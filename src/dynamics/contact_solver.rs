@@ -1,0 +1,903 @@
+//! The contact rows of the soft step: soft normal rows with a bounded push-out, Coulomb
+//! friction with a static and a kinetic coefficient, rolling resistance and twist
+//! friction, and the collision pass (restitution).
+//!
+//! # Notation
+//!
+//! Per contact point: lever arms `r = p − c` from each centre of mass `c` (world, fixed
+//! at prepare), unit normal `n` from A to B, tangents `t₁, t₂` with `(t₁, t₂, n)`
+//! right-handed, relative velocity `Δv = (v_b + ω_b × r_b) − (v_a + ω_a × r_a)`, normal
+//! speed `v_n = Δv·n` (negative when closing). An impulse `P` acts as `+P` on B and `−P`
+//! on A. Along a unit direction `d` the effective mass is
+//!
+//! ```text
+//! m_d = 1 / (1/m_a + 1/m_b + (r_a × d)·I_a⁻¹ (r_a × d) + (r_b × d)·I_b⁻¹ (r_b × d))
+//! ```
+//!
+//! with the world inverse inertia `I⁻¹ = R I_local⁻¹ Rᵀ`. Static, kinematic and sleeping
+//! bodies have `1/m = 0`, `I⁻¹ = 0`. Prepare stores the angular Jacobians `r × d` and the
+//! products `I⁻¹ (r × d)` of every row, so a row costs a few dot products and no 3×3
+//! product.
+//!
+//! # Separation inside the step
+//!
+//! Each point keeps its anchors fixed in the two bodies (`l`, relative to the centre of
+//! mass, in body axes). After a body moved by `Δp` and turned to `R`, the anchor sits at
+//! `Δp + R l` relative to where the centre of mass started, so
+//!
+//! ```text
+//! s = n·(c_b − c_a) − ρ_a − ρ_b + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
+//! ```
+//!
+//! (Box2D v3's `adjustedSeparation`). The anchors are the points of the shapes' *cores*:
+//! the surface point moved inwards by the rounding radius `ρ` (a sphere's or capsule's
+//! radius, 0 for polytopes), and the separation subtracts `ρ_a + ρ_b` again. For a
+//! polytope that is the surface point; for a sphere it is the centre, so a ball spinning
+//! fast along a wall does not carry its anchor away from the wall (Box2D's surface
+//! anchors would: the contact would read as opening while the ball slides into the
+//! wall). The narrow phase runs once per step; every sub-step sees the separation its
+//! motion made.
+//!
+//! # Soft normal row (Catto, "Solver2D"; `SOLVER.md`)
+//!
+//! For a stiffness `f` (Hz), damping ratio `ζ` and sub-step `h`: `ω = 2π f`,
+//! `a₁ = 2ζ + hω`, `a₂ = hω a₁`, `a₃ = 1 / (1 + a₂)`; `bias_rate = ω / a₁` (1/s),
+//! `mass_scale = a₂ a₃`, `impulse_scale = a₃`. Then
+//!
+//! ```text
+//! s > 0 (speculative):  bias = s / h,  mass_scale = 1, impulse_scale = 0  (rigid: close the gap, no more)
+//! s ≤ 0, solve:         bias = max(mass_scale · bias_rate · s, −max_push_speed), soft scales
+//! s ≤ 0, relax:         bias = 0, mass_scale = 1, impulse_scale = 0
+//! λ = −m_n (mass_scale · v_n + bias) − impulse_scale · λ_acc,  λ_acc = max(λ_acc + λ, 0)
+//! ```
+//!
+//! (the push-out speed is `mass_scale · bias_rate · s`, at most `max_push_speed`).
+//! Contacts against static or kinematic bodies use twice the stiffness (Box2D v3's
+//! `staticSoftness`); the stiffness is capped at a quarter of the sub-step rate. As in
+//! Box2D v3, no slop is left in place: a stack of `k` boxes would sink `k` slops.
+//! Friction, rolling and twist run in the relax iterations only (also Box2D v3's
+//! choice): the biased iteration's velocities are not the ones the bodies keep.
+//!
+//! # Friction, static and kinetic
+//!
+//! A 2D impulse `λ_t = λ_t,acc − (m_t₁ (Δv·t₁), m_t₂ (Δv·t₂))` clipped to the disc of
+//! radius `μ λ_n`, after the point's normal row. A sticking point uses
+//! `μ = static_friction`, a sliding one `kinetic_friction`:
+//!
+//! - at prepare a point *sticks* if it stuck last step, or its tangential speed is below
+//!   `stick_speed`, or it carried no normal impulse last step (a new or speculative
+//!   point has no friction state yet: the solve decides);
+//! - in the last relax iteration of the step, a sticking point that carried a normal
+//!   impulse into the step (not a new one, whose normal impulse is still building up),
+//!   that the static cone clipped *and* that still slips faster than `stick_speed`
+//!   after its row starts sliding, clipped to the kinetic cone at once; a sliding point whose slip fell below
+//!   `stick_speed` sticks again. (A clipped point alone proves nothing: Gauss-Seidel
+//!   loads the first points of a manifold up to their cones while the later ones hold
+//!   the rest. Testing the speed at prepare alone fails on a slope: gravity adds
+//!   `g h sin θ` of slip before every prepare, so a point that slid once would slide for
+//!   ever.)
+//!
+//! # Rolling resistance and twist friction
+//!
+//! Two angular rows along `t₁, t₂` resist the relative rolling `(ω_b − ω_a)` of
+//! manifolds with one or two points, clipped to the disc of radius
+//! `rolling_resistance · Σλ_n · ℓ`; one angular row along `n` resists the relative spin
+//! of single-point manifolds, clipped to `twist_friction · Σλ_n · ℓ`. `ℓ` is the lever
+//! arm `|r|` of the (smaller) moving body to the first point; the effective mass along
+//! an axis `d` is `1 / (d·(I_a⁻¹ + I_b⁻¹) d)`. A flat patch of three or more points does
+//! not roll, and two or more points already resist twist through their friction.
+//!
+//! # Collision pass (restitution)
+//!
+//! Before the sub-steps, from the velocities at the start of the step (before this
+//! step's gravity: a bounce target that included it would add energy every bounce):
+//! up to [`MAX_BOUNCE_PASSES`] sweeps over the constraints in order; each constraint
+//! with a point closing faster than `restitution_threshold` (measured *now*) whose gap
+//! closes within the step gets a transient impulse making those points separate at
+//! `e · approach` ([`BOUNCE_ITERATIONS`] rounds over its colliding points, with
+//! friction in the cone of that impulse). A sweep that bounces nothing ends the pass.
+//! These impulses are not warm-started. Each bounce alone can only lose energy.
+//!
+//! *Departure from Box2D v3*, which applies restitution after the sub-steps with the
+//! normal speed measured at prepare: that speed is seen only by the first contact of a
+//! chain of touching bodies, and a Newton's cradle then solves to `−0.6 v, 0.4 v`
+//! instead of passing the speed down the row. Measuring the approach when a contact is
+//! visited makes the impulse travel along the chain, one contact per sweep at worst.
+
+use super::body::{Body, BodyKind};
+use super::contact::Contact;
+use super::pool::Pool;
+use super::solver::{is_active, is_moving_kinematic, Solver, SolverBody, NONE};
+use crate::config::WorldConfig;
+use crate::math::{scalar, Mat3, Vec3};
+
+/// Rounds of the small accumulated solve the collision pass runs over one contact's
+/// colliding points. One is exact for a single point; four bring a flat face landing on
+/// four points to within a few per cent of the simultaneous answer.
+pub(crate) const BOUNCE_ITERATIONS: u32 = 4;
+
+/// Most sweeps of the collision pass (a chain of `k` touching bodies in the worst order
+/// needs `k − 1`).
+pub(crate) const MAX_BOUNCE_PASSES: u32 = 16;
+
+/// Soft constraint coefficients for one sub-step (module docs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct Softness {
+    /// `ω / a₁` (1/s).
+    pub bias_rate: f32,
+    /// `a₂ a₃`.
+    pub mass_scale: f32,
+    /// `a₃`.
+    pub impulse_scale: f32,
+}
+
+impl Softness {
+    /// The coefficients of a spring of `hertz` with damping ratio `zeta`, sub-step `h`.
+    pub fn new(hertz: f32, zeta: f32, h: f32) -> Softness {
+        if hertz <= 0.0 {
+            return Softness {
+                bias_rate: 0.0,
+                mass_scale: 1.0,
+                impulse_scale: 0.0,
+            };
+        }
+        let omega = core::f32::consts::TAU * hertz;
+        let a1 = 2.0 * zeta + h * omega;
+        let a2 = h * omega * a1;
+        let a3 = 1.0 / (1.0 + a2);
+        Softness {
+            bias_rate: omega / a1,
+            mass_scale: a2 * a3,
+            impulse_scale: a3,
+        }
+    }
+}
+
+/// One contact point of a constraint (module docs for the symbols).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ConstraintPoint {
+    /// Core anchor on A relative to A's centre of mass, in A's body axes (m): the
+    /// surface point moved in by A's rounding radius (module docs).
+    pub local_a: Vec3,
+    /// Core anchor on B, as `local_a`.
+    pub local_b: Vec3,
+    /// Core anchor on A relative to its centre of mass at prepare (world, m).
+    pub core_a: Vec3,
+    /// Core anchor on B at prepare (world, m).
+    pub core_b: Vec3,
+    /// Lever arm on A at prepare (world, m): the surface point, for the Jacobians.
+    pub r_a: Vec3,
+    /// Lever arm on B at prepare (world, m).
+    pub r_b: Vec3,
+    /// `n·(c_b − c_a) − ρ_a − ρ_b` at prepare (m): with the core anchors' motion it gives
+    /// the separation.
+    pub adjusted_separation: f32,
+    /// `r_a × n`.
+    pub rn_a: Vec3,
+    /// `r_b × n`.
+    pub rn_b: Vec3,
+    /// `I_a⁻¹ (r_a × n)`.
+    pub in_a: Vec3,
+    /// `I_b⁻¹ (r_b × n)`.
+    pub in_b: Vec3,
+    /// `r_a × t₁`, `r_a × t₂`.
+    pub rt_a: [Vec3; 2],
+    /// `r_b × t₁`, `r_b × t₂`.
+    pub rt_b: [Vec3; 2],
+    /// `I_a⁻¹ (r_a × tᵢ)`.
+    pub it_a: [Vec3; 2],
+    /// `I_b⁻¹ (r_b × tᵢ)`.
+    pub it_b: [Vec3; 2],
+    /// Effective mass along the normal (kg).
+    pub normal_mass: f32,
+    /// Effective masses along the tangents (kg).
+    pub tangent_mass: [f32; 2],
+    /// Accumulated normal impulse of a sub-step (N·s).
+    pub normal_impulse: f32,
+    /// Accumulated friction impulse along the tangents (N·s).
+    pub tangent_impulse: [f32; 2],
+    /// Separation at prepare (m).
+    pub separation0: f32,
+    /// Separation at the last row solved (m).
+    pub separation: f32,
+    /// Sum of the normal impulses applied this step (N·s): zero when the point never
+    /// pushed (a speculative point that was not reached).
+    pub total_impulse: f32,
+    /// Normal speed `v_n` at prepare, before this step's gravity (m/s).
+    pub normal_speed0: f32,
+    /// Bounced by the collision pass before the sub-steps.
+    pub bounced: bool,
+    /// The point carried a normal impulse into this step (it is not new): only such a
+    /// point may start sliding, once its normal impulse has settled.
+    pub established: bool,
+    /// True while the point sticks.
+    pub sticking: bool,
+}
+
+/// The rows of one manifold for one step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct ContactConstraint {
+    /// Index of the contact in the contact list.
+    pub contact: u32,
+    /// Pool slot of A.
+    pub slot_a: u32,
+    /// Pool slot of B.
+    pub slot_b: u32,
+    /// Solver index of A, or [`NONE`].
+    pub a: u32,
+    /// Solver index of B, or [`NONE`].
+    pub b: u32,
+    /// Inverse masses (1/kg), 0 for bodies that do not move.
+    pub inv_mass_a: f32,
+    /// See `inv_mass_a`.
+    pub inv_mass_b: f32,
+    /// Unit normal from A to B (world).
+    pub normal: Vec3,
+    /// Tangents.
+    pub tangents: [Vec3; 2],
+    /// Points in use.
+    pub len: u8,
+    /// The points.
+    pub points: [ConstraintPoint; 4],
+    /// Static and kinetic friction coefficients.
+    pub friction: [f32; 2],
+    /// Coefficient of restitution.
+    pub restitution: f32,
+    /// Largest rolling impulse per unit of total normal impulse (m), 0 when off.
+    pub rolling: f32,
+    /// Largest twist impulse per unit of total normal impulse (m), 0 when off.
+    pub twist: f32,
+    /// `I_a⁻¹ t₁, I_a⁻¹ t₂, I_a⁻¹ n` (rolling and twist rows).
+    pub ia_axes: [Vec3; 3],
+    /// `I_b⁻¹ t₁, I_b⁻¹ t₂, I_b⁻¹ n`.
+    pub ib_axes: [Vec3; 3],
+    /// Effective masses of the rolling and twist rows (kg·m²).
+    pub axis_mass: [f32; 3],
+    /// Accumulated rolling (t₁, t₂) and twist (n) angular impulses (N·m·s).
+    pub angular_impulse: [f32; 3],
+    /// Soft coefficients of the normal rows.
+    pub softness: Softness,
+    /// `ρ_a + ρ_b`: the shapes' rounding radii (sphere and capsule radius, 0 otherwise).
+    pub radius_sum: f32,
+}
+
+/// A sleeping dynamic body that an awake dynamic or moving kinematic body touches or
+/// reaches within `dt` wakes, so a hit on a sleeping stack moves the body it hits
+/// (`sleep.rs` wakes the rest of its island at the end of the step).
+pub(crate) fn wake_touched_sleepers<const N: usize>(
+    c: &Contact,
+    bodies: &mut Pool<Body<'_>, N>,
+    dt: f32,
+) {
+    if c.sensor || c.len == 0 {
+        return;
+    }
+    let Some((a, b)) = bodies.pair_mut(c.a as usize, c.b as usize) else {
+        return;
+    };
+    let pushes = |x: &Body<'_>| is_active(x) || is_moving_kinematic(x);
+    let sleeps = |x: &Body<'_>| x.is_dynamic() && !x.awake;
+    let wake_a = sleeps(a) && pushes(b);
+    let wake_b = sleeps(b) && pushes(a);
+    if !wake_a && !wake_b {
+        return;
+    }
+    let n = c.normal;
+    let reached = c.points().iter().any(|p| {
+        let p_a = a.pose.transform_point(p.local_a);
+        let p_b = b.pose.transform_point(p.local_b);
+        let approach = -(b.velocity_at(p_b) - a.velocity_at(p_a)).dot(n);
+        closes_within(p.separation, approach, dt)
+    });
+    if reached {
+        for (x, wake) in [(a, wake_a), (b, wake_b)] {
+            if wake {
+                x.awake = true;
+                x.sleep_time = 0.0;
+            }
+        }
+    }
+}
+
+/// Whether a point `s` metres apart, closing at `approach` m/s, touches within `dt`
+/// seconds (a touching or penetrating point always does).
+#[inline]
+fn closes_within(separation: f32, approach: f32, dt: f32) -> bool {
+    separation <= 0.0 || approach * dt > separation
+}
+
+/// True when one body of the contact is static or kinematic.
+pub(crate) fn has_rigid_partner<const N: usize>(c: &Contact, bodies: &Pool<Body<'_>, N>) -> bool {
+    let rigid = |s: u32| {
+        bodies
+            .at(s as usize)
+            .is_none_or(|b| b.kind != BodyKind::Dynamic)
+    };
+    rigid(c.a) || rigid(c.b)
+}
+
+/// The constraint of contact `index`, or `None` when it does not push: a sensor, no
+/// point, or no moving dynamic body.
+pub(crate) fn prepare<const N: usize, const C: usize>(
+    c: &Contact,
+    index: u32,
+    bodies: &Pool<Body<'_>, N>,
+    solver: &Solver<N, C>,
+    cfg: &WorldConfig,
+) -> Option<ContactConstraint> {
+    if c.sensor || c.len == 0 {
+        return None;
+    }
+    let body_a = bodies.at(c.a as usize)?;
+    let body_b = bodies.at(c.b as usize)?;
+    let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
+    let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
+    let sa = solver.bodies.get(ia as usize);
+    let sb = solver.bodies.get(ib as usize);
+    let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    if m_a <= 0.0 && m_b <= 0.0 {
+        return None;
+    }
+    let h = cfg.substep();
+    let n = c.normal;
+    let t1 = n.any_perpendicular();
+    let t2 = n.cross(t1);
+    let rigid_partner = body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic;
+    let hertz = scalar::min(cfg.contact_hertz, 0.25 / h);
+    let hertz = if rigid_partner { 2.0 * hertz } else { hertz };
+    let center_a = body_a.world_center();
+    let center_b = body_b.world_center();
+    let rot_a = sa.map(|s| s.rot);
+    let rot_b = sb.map(|s| s.rot);
+    let (va, wa) = sa.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
+    let (vb, wb) = sb.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
+    let stick2 = cfg.stick_speed * cfg.stick_speed;
+    let m = c.material;
+    let mut k = ContactConstraint {
+        contact: index,
+        slot_a: c.a,
+        slot_b: c.b,
+        a: if sa.is_some() { ia } else { NONE },
+        b: if sb.is_some() { ib } else { NONE },
+        inv_mass_a: m_a,
+        inv_mass_b: m_b,
+        normal: n,
+        tangents: [t1, t2],
+        len: 0,
+        friction: [m.static_friction, m.kinetic_friction],
+        restitution: m.restitution,
+        softness: Softness::new(hertz, cfg.contact_damping_ratio, h),
+        ..ContactConstraint::default()
+    };
+    let (rho_a, rho_b) = (body_a.shape.radius(), body_b.shape.radius());
+    k.radius_sum = rho_a + rho_b;
+    for (dst, p) in k.points.iter_mut().zip(c.points()) {
+        let r_a = body_a.pose.transform_point(p.local_a) - center_a;
+        let r_b = body_b.pose.transform_point(p.local_b) - center_b;
+        // The cores' points: a sphere's is its centre, so its spin does not carry the
+        // anchor away from the contact.
+        let core_a = r_a - n * rho_a;
+        let core_b = r_b + n * rho_b;
+        let rn_a = r_a.cross(n);
+        let rn_b = r_b.cross(n);
+        let in_a = i_a.mul_vec(rn_a);
+        let in_b = i_b.mul_vec(rn_b);
+        let rt_a = [r_a.cross(t1), r_a.cross(t2)];
+        let rt_b = [r_b.cross(t1), r_b.cross(t2)];
+        let it_a = [i_a.mul_vec(rt_a[0]), i_a.mul_vec(rt_a[1])];
+        let it_b = [i_b.mul_vec(rt_b[0]), i_b.mul_vec(rt_b[1])];
+        let mass = |ra: Vec3, ina: Vec3, rb: Vec3, inb: Vec3| {
+            let kk = m_a + m_b + ra.dot(ina) + rb.dot(inb);
+            if kk > 0.0 && kk.is_finite() {
+                1.0 / kk
+            } else {
+                0.0
+            }
+        };
+        let dv = (vb + wb.cross(r_b)) - (va + wa.cross(r_a));
+        let vn = dv.dot(n);
+        let slip = dv - n * vn;
+        let normal_mass = mass(rn_a, in_a, rn_b, in_b);
+        // Warm-start impulses are bounded: none may change the normal speed by more than
+        // twice the speed limit plus the push-out (a real one never comes near), and the
+        // friction impulse stays in the static cone. So no stored impulse, however it
+        // came to be (a crafted snapshot included), can send a body to a non-finite speed.
+        let max_normal = normal_mass * (2.0 * cfg.max_linear_speed + cfg.max_push_speed);
+        let normal_impulse = scalar::min(p.normal_impulse, max_normal);
+        let tangent = p.tangent_impulse - n * p.tangent_impulse.dot(n);
+        let (tangent_impulse, _) = clip_to_disc(
+            [tangent.dot(t1), tangent.dot(t2)],
+            m.static_friction * normal_impulse,
+        );
+        *dst = ConstraintPoint {
+            local_a: rot_a.map_or(core_a, |r| r.transpose_mul_vec(core_a)),
+            local_b: rot_b.map_or(core_b, |r| r.transpose_mul_vec(core_b)),
+            core_a,
+            core_b,
+            r_a,
+            r_b,
+            adjusted_separation: n.dot(center_b - center_a) - k.radius_sum,
+            rn_a,
+            rn_b,
+            in_a,
+            in_b,
+            rt_a,
+            rt_b,
+            it_a,
+            it_b,
+            normal_mass,
+            tangent_mass: [
+                mass(rt_a[0], it_a[0], rt_b[0], it_b[0]),
+                mass(rt_a[1], it_a[1], rt_b[1], it_b[1]),
+            ],
+            normal_impulse,
+            tangent_impulse,
+            separation0: p.separation,
+            separation: p.separation,
+            total_impulse: 0.0,
+            normal_speed0: vn,
+            bounced: false,
+            established: normal_impulse > 0.0,
+            sticking: p.sticking || slip.length_squared() < stick2 || p.normal_impulse <= 0.0,
+        };
+        k.len += 1;
+    }
+    prepare_angular_rows(&mut k, &i_a, &i_b, m.rolling_resistance, m.twist_friction);
+    Some(k)
+}
+
+/// Rolling rows for manifolds of one or two points, the twist row for single points
+/// (module docs), with their lever arm and effective masses.
+fn prepare_angular_rows(
+    k: &mut ContactConstraint,
+    i_a: &Mat3,
+    i_b: &Mat3,
+    rolling: f32,
+    twist: f32,
+) {
+    let Some(p) = k.points.first() else {
+        return;
+    };
+    let lever = match (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0) {
+        (true, true) => scalar::min(p.r_a.length(), p.r_b.length()),
+        (true, false) => p.r_a.length(),
+        _ => p.r_b.length(),
+    };
+    k.rolling = if k.len <= 2 { rolling * lever } else { 0.0 };
+    k.twist = if k.len == 1 { twist * lever } else { 0.0 };
+    if k.rolling <= 0.0 && k.twist <= 0.0 {
+        return;
+    }
+    let [t1, t2] = k.tangents;
+    let axes = [t1, t2, k.normal];
+    for (i, d) in axes.iter().enumerate() {
+        let ia = i_a.mul_vec(*d);
+        let ib = i_b.mul_vec(*d);
+        let kk = d.dot(ia) + d.dot(ib);
+        if let (Some(x), Some(y), Some(m)) = (
+            k.ia_axes.get_mut(i),
+            k.ib_axes.get_mut(i),
+            k.axis_mass.get_mut(i),
+        ) {
+            *x = ia;
+            *y = ib;
+            *m = if kk > 0.0 && kk.is_finite() {
+                1.0 / kk
+            } else {
+                0.0
+            };
+        }
+    }
+}
+
+/// Velocities of the two solver bodies of a constraint (zero for [`NONE`]).
+#[inline]
+fn velocities(bodies: &[SolverBody], i: u32) -> (Vec3, Vec3) {
+    bodies
+        .get(i as usize)
+        .map_or((Vec3::ZERO, Vec3::ZERO), |b| (b.v, b.w))
+}
+
+/// Write velocities back (ignored for [`NONE`]).
+#[inline]
+fn set_velocities(bodies: &mut [SolverBody], i: u32, v: Vec3, w: Vec3) {
+    if let Some(b) = bodies.get_mut(i as usize) {
+        b.v = v;
+        b.w = w;
+    }
+}
+
+/// The working state of one constraint's two bodies while its rows run.
+struct Pair {
+    va: Vec3,
+    wa: Vec3,
+    vb: Vec3,
+    wb: Vec3,
+}
+
+impl Pair {
+    #[inline]
+    fn load(k: &ContactConstraint, bodies: &[SolverBody]) -> Pair {
+        let (va, wa) = velocities(bodies, k.a);
+        let (vb, wb) = velocities(bodies, k.b);
+        Pair { va, wa, vb, wb }
+    }
+
+    #[inline]
+    fn save(&self, k: &ContactConstraint, bodies: &mut [SolverBody]) {
+        set_velocities(bodies, k.a, self.va, self.wa);
+        set_velocities(bodies, k.b, self.vb, self.wb);
+    }
+
+    /// Normal speed `v_n` at point `p`.
+    #[inline]
+    fn normal_speed(&self, n: Vec3, p: &ConstraintPoint) -> f32 {
+        n.dot(self.vb - self.va) + self.wb.dot(p.rn_b) - self.wa.dot(p.rn_a)
+    }
+
+    /// Tangential speed along `t[i]` at point `p`.
+    #[inline]
+    fn tangent_speed(&self, t: Vec3, p: &ConstraintPoint, i: usize) -> f32 {
+        let (rb, ra) = match (p.rt_b.get(i), p.rt_a.get(i)) {
+            (Some(rb), Some(ra)) => (*rb, *ra),
+            _ => return 0.0,
+        };
+        t.dot(self.vb - self.va) + self.wb.dot(rb) - self.wa.dot(ra)
+    }
+
+    /// Apply `λ` along the normal at `p`.
+    #[inline]
+    fn push_normal(&mut self, k: &ContactConstraint, p: &ConstraintPoint, lambda: f32) {
+        let j = k.normal * lambda;
+        self.va -= j * k.inv_mass_a;
+        self.wa -= p.in_a * lambda;
+        self.vb += j * k.inv_mass_b;
+        self.wb += p.in_b * lambda;
+    }
+
+    /// Apply `(λ₁, λ₂)` along the tangents at `p`.
+    #[inline]
+    fn push_tangent(&mut self, k: &ContactConstraint, p: &ConstraintPoint, l: [f32; 2]) {
+        let [t1, t2] = k.tangents;
+        let j = t1 * l[0] + t2 * l[1];
+        self.va -= j * k.inv_mass_a;
+        self.wa -= p.it_a[0] * l[0] + p.it_a[1] * l[1];
+        self.vb += j * k.inv_mass_b;
+        self.wb += p.it_b[0] * l[0] + p.it_b[1] * l[1];
+    }
+
+    /// Apply an angular impulse `λ` about axis `i` (t₁, t₂, n).
+    #[inline]
+    fn push_angular(&mut self, k: &ContactConstraint, i: usize, lambda: f32) {
+        if let (Some(ia), Some(ib)) = (k.ia_axes.get(i), k.ib_axes.get(i)) {
+            self.wa -= *ia * lambda;
+            self.wb += *ib * lambda;
+        }
+    }
+}
+
+/// Apply the accumulated impulses of every constraint (start of each sub-step).
+pub(crate) fn warm_start(constraints: &[ContactConstraint], bodies: &mut [SolverBody]) {
+    for k in constraints {
+        let mut pair = Pair::load(k, bodies);
+        for p in k.points.iter().take(usize::from(k.len)) {
+            pair.push_normal(k, p, p.normal_impulse);
+            pair.push_tangent(k, p, p.tangent_impulse);
+        }
+        for i in 0..3 {
+            if let Some(l) = k.angular_impulse.get(i) {
+                if *l != 0.0 {
+                    pair.push_angular(k, i, *l);
+                }
+            }
+        }
+        pair.save(k, bodies);
+    }
+}
+
+/// The anchor of a point on a body now, relative to where its centre of mass started
+/// (module docs): `Δp + R l`, or the fixed lever arm for a body without a solver entry.
+#[inline]
+fn anchor_now(bodies: &[SolverBody], i: u32, local: Vec3, r0: Vec3) -> Vec3 {
+    match bodies.get(i as usize) {
+        Some(b) => b.dp + b.rot.mul_vec(local),
+        None => r0,
+    }
+}
+
+/// The separation of `p` at the bodies' current positions (m).
+#[inline]
+fn current_separation(k: &ContactConstraint, p: &ConstraintPoint, bodies: &[SolverBody]) -> f32 {
+    let d =
+        anchor_now(bodies, k.b, p.local_b, p.core_b) - anchor_now(bodies, k.a, p.local_a, p.core_a);
+    p.adjusted_separation + k.normal.dot(d)
+}
+
+/// One iteration over every constraint in order: normal rows (soft with `use_bias`,
+/// rigid without), friction, rolling and twist (module docs). `last` marks the last
+/// relax iteration of the step, where stick/slip changes.
+pub(crate) fn solve(
+    constraints: &mut [ContactConstraint],
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+    inv_h: f32,
+    use_bias: bool,
+    last: bool,
+) {
+    for k in constraints.iter_mut() {
+        solve_constraint(k, bodies, cfg, inv_h, use_bias, last);
+    }
+}
+
+fn solve_constraint(
+    k: &mut ContactConstraint,
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+    inv_h: f32,
+    use_bias: bool,
+    last: bool,
+) {
+    let mut pair = Pair::load(k, bodies);
+    let n = k.normal;
+    let soft = k.softness;
+    let len = usize::from(k.len);
+    let mut total_normal = 0.0f32;
+    // Normal rows.
+    for i in 0..len {
+        let Some(p) = k.points.get(i).copied() else {
+            break;
+        };
+        let s = current_separation(k, &p, bodies);
+        let (bias, mass_scale, impulse_scale) = if s > 0.0 {
+            (s * inv_h, 1.0, 0.0)
+        } else if use_bias {
+            let push = scalar::max(soft.mass_scale * soft.bias_rate * s, -cfg.max_push_speed);
+            (push, soft.mass_scale, soft.impulse_scale)
+        } else {
+            (0.0, 1.0, 0.0)
+        };
+        let vn = pair.normal_speed(n, &p);
+        let lambda = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
+        let new = scalar::max(p.normal_impulse + lambda, 0.0);
+        let delta = new - p.normal_impulse;
+        pair.push_normal(k, &p, delta);
+        if let Some(q) = k.points.get_mut(i) {
+            q.normal_impulse = new;
+            q.total_impulse += delta;
+            q.separation = s;
+        }
+        total_normal += new;
+    }
+    if use_bias {
+        pair.save(k, bodies);
+        return;
+    }
+    // Friction rows.
+    let [mu_s, mu_k] = k.friction;
+    let stick2 = cfg.stick_speed * cfg.stick_speed;
+    let [t1, t2] = k.tangents;
+    for i in 0..len {
+        let Some(mut p) = k.points.get(i).copied() else {
+            break;
+        };
+        let mu = if p.sticking { mu_s } else { mu_k };
+        let v1 = pair.tangent_speed(t1, &p, 0);
+        let v2 = pair.tangent_speed(t2, &p, 1);
+        let old = p.tangent_impulse;
+        let wanted = [
+            old[0] - p.tangent_mass[0] * v1,
+            old[1] - p.tangent_mass[1] * v2,
+        ];
+        let (mut new, clipped) = clip_to_disc(wanted, mu * p.normal_impulse);
+        pair.push_tangent(k, &p, [new[0] - old[0], new[1] - old[1]]);
+        if last {
+            let slip2 = {
+                let a = pair.tangent_speed(t1, &p, 0);
+                let b = pair.tangent_speed(t2, &p, 1);
+                a * a + b * b
+            };
+            if p.sticking && p.established && clipped && slip2 >= stick2 {
+                // The static cone gave way: slide, at the kinetic cone from now on.
+                p.sticking = false;
+                let (kinetic, _) = clip_to_disc(new, mu_k * p.normal_impulse);
+                pair.push_tangent(k, &p, [kinetic[0] - new[0], kinetic[1] - new[1]]);
+                new = kinetic;
+            } else if !p.sticking && slip2 < stick2 {
+                p.sticking = true;
+            }
+        }
+        p.tangent_impulse = new;
+        if let Some(q) = k.points.get_mut(i) {
+            *q = p;
+        }
+    }
+    // Rolling resistance (t₁, t₂) and twist friction (n).
+    if k.rolling > 0.0 || k.twist > 0.0 {
+        let dw = pair.wb - pair.wa;
+        let [m1, m2, m3] = k.axis_mass;
+        if k.rolling > 0.0 {
+            let old = [k.angular_impulse[0], k.angular_impulse[1]];
+            let wanted = [old[0] - m1 * dw.dot(t1), old[1] - m2 * dw.dot(t2)];
+            let (new, _) = clip_to_disc(wanted, k.rolling * total_normal);
+            pair.push_angular(k, 0, new[0] - old[0]);
+            pair.push_angular(k, 1, new[1] - old[1]);
+            k.angular_impulse[0] = new[0];
+            k.angular_impulse[1] = new[1];
+        }
+        if k.twist > 0.0 {
+            let dw = pair.wb - pair.wa;
+            let old = k.angular_impulse[2];
+            let max = k.twist * total_normal;
+            let new = scalar::clamp(old - m3 * dw.dot(n), -max, max);
+            pair.push_angular(k, 2, new - old);
+            k.angular_impulse[2] = new;
+        }
+    }
+    pair.save(k, bodies);
+}
+
+/// `v` shortened to length at most `radius` (a non-positive radius gives zero), and
+/// whether it was shortened.
+#[inline]
+fn clip_to_disc(v: [f32; 2], radius: f32) -> ([f32; 2], bool) {
+    if radius.is_nan() || radius <= 0.0 {
+        return ([0.0, 0.0], v != [0.0, 0.0]);
+    }
+    let l2 = v[0] * v[0] + v[1] * v[1];
+    if l2 > radius * radius {
+        let s = radius / scalar::sqrt(l2);
+        ([v[0] * s, v[1] * s], true)
+    } else {
+        (v, false)
+    }
+}
+
+/// The collision pass (module docs): only points already within the speculative margin
+/// at the start of the step bounce here; points further out are stopped at the surface
+/// by their speculative rows and bounce in [`restitution`] after the sub-steps.
+pub(crate) fn bounce(
+    constraints: &mut [ContactConstraint],
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+) {
+    if !constraints.iter().any(|k| k.restitution > 0.0) {
+        return;
+    }
+    for _ in 0..MAX_BOUNCE_PASSES {
+        let mut bounced = false;
+        for k in constraints.iter_mut() {
+            bounced |= bounce_constraint(k, bodies, cfg);
+        }
+        if !bounced {
+            break;
+        }
+    }
+}
+
+/// One constraint of one sweep of the collision pass: true when some point bounced.
+fn bounce_constraint(
+    k: &mut ContactConstraint,
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+) -> bool {
+    let e = k.restitution;
+    if e <= 0.0 {
+        return false;
+    }
+    let mut pair = Pair::load(k, bodies);
+    let n = k.normal;
+    let len = usize::from(k.len);
+    let mut target = [0.0f32; 4];
+    let mut hit = [false; 4];
+    let mut any = false;
+    for i in 0..len {
+        let (Some(p), Some(t), Some(h)) = (k.points.get(i), target.get_mut(i), hit.get_mut(i))
+        else {
+            break;
+        };
+        let approach = -pair.normal_speed(n, p);
+        let near = p.separation0 <= cfg.speculative_margin;
+        if near
+            && approach > cfg.restitution_threshold
+            && closes_within(p.separation0, approach, cfg.dt)
+        {
+            *h = true;
+            *t = e * approach;
+            any = true;
+        }
+    }
+    if !any {
+        return false;
+    }
+    let [mu_s, mu_k] = k.friction;
+    let [t1, t2] = k.tangents;
+    let mut normal = [0.0f32; 4];
+    let mut tangent = [[0.0f32; 2]; 4];
+    for _ in 0..BOUNCE_ITERATIONS {
+        for i in 0..len {
+            let (Some(p), Some(true), Some(lambda), Some(tau)) = (
+                k.points.get(i),
+                hit.get(i).copied(),
+                normal.get(i),
+                tangent.get_mut(i),
+            ) else {
+                continue;
+            };
+            let mu = if p.sticking { mu_s } else { mu_k };
+            let wanted = [
+                tau[0] - p.tangent_mass[0] * pair.tangent_speed(t1, p, 0),
+                tau[1] - p.tangent_mass[1] * pair.tangent_speed(t2, p, 1),
+            ];
+            let (new, _) = clip_to_disc(wanted, mu * *lambda);
+            pair.push_tangent(k, p, [new[0] - tau[0], new[1] - tau[1]]);
+            *tau = new;
+        }
+        for i in 0..len {
+            let (Some(p), Some(true), Some(t), Some(lambda)) = (
+                k.points.get(i),
+                hit.get(i).copied(),
+                target.get(i),
+                normal.get_mut(i),
+            ) else {
+                continue;
+            };
+            let vn = pair.normal_speed(n, p);
+            let new = scalar::max(*lambda - p.normal_mass * (vn - *t), 0.0);
+            pair.push_normal(k, p, new - *lambda);
+            *lambda = new;
+        }
+    }
+    pair.save(k, bodies);
+    for (p, h) in k.points.iter_mut().zip(hit) {
+        p.bounced |= h;
+    }
+    true
+}
+
+/// The restitution pass after the sub-steps (Box2D v3's `b2ApplyRestitution`), for the
+/// points the collision pass left alone: a point that closed faster than the threshold
+/// at prepare (`v_n0 < −threshold`) and pushed during the sub-steps (a speculative point
+/// far away at the start of the step, stopped at the surface by its row) gets
+/// `λ = −m_n (v_n + e v_n0)`, accumulated `≥ 0` in a pass of its own (not warm-started).
+pub(crate) fn restitution(
+    constraints: &[ContactConstraint],
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+) {
+    for k in constraints.iter().filter(|k| k.restitution > 0.0) {
+        let mut pair = Pair::load(k, bodies);
+        let mut any = false;
+        for p in k.points.iter().take(usize::from(k.len)) {
+            if p.bounced || p.normal_speed0 > -cfg.restitution_threshold || p.total_impulse <= 0.0 {
+                continue;
+            }
+            let vn = pair.normal_speed(k.normal, p);
+            let lambda = scalar::max(-p.normal_mass * (vn + k.restitution * p.normal_speed0), 0.0);
+            pair.push_normal(k, p, lambda);
+            any = true;
+        }
+        if any {
+            pair.save(k, bodies);
+        }
+    }
+}
+
+/// Store the accumulated impulses and stick/slip state into the contacts.
+pub(crate) fn store(constraints: &[ContactConstraint], contacts: &mut [Contact]) {
+    for k in constraints {
+        let Some(c) = contacts.get_mut(k.contact as usize) else {
+            continue;
+        };
+        let [t1, t2] = k.tangents;
+        for (q, p) in c
+            .points
+            .iter_mut()
+            .zip(k.points.iter().take(usize::from(k.len)))
+        {
+            q.normal_impulse = p.normal_impulse;
+            q.tangent_impulse = t1 * p.tangent_impulse[0] + t2 * p.tangent_impulse[1];
+            q.sticking = p.sticking;
+        }
+    }
+}
