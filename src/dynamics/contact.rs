@@ -41,8 +41,9 @@
 //! A rebuilt manifold's points are matched to the old ones by feature-id key first
 //! (Catto, Box2D `b2UpdateContact`); a point whose id matches nothing takes the nearest
 //! unmatched old point whose anchors both moved less than `2 · slop` in their body frames.
-//! A matched point inherits the accumulated normal and friction impulses (the friction
-//! impulse projected onto the new tangent plane) and the sticking flag. A reused
+//! A matched point inherits the accumulated normal impulse. The friction patch's
+//! impulse (projected onto the new tangent plane), twist impulse and sticking flag stay
+//! with the contact while it has points, and reset when its manifold empties. A reused
 //! manifold keeps its points, impulses and flags as they are.
 //!
 //! # Touching and events
@@ -90,14 +91,9 @@ pub(crate) struct ContactPoint {
     pub separation: f32,
     /// Accumulated normal impulse of one sub-step (N·s), ≥ 0.
     pub normal_impulse: f32,
-    /// Accumulated friction impulse of one sub-step (N·s, world vector in the tangent
-    /// plane).
-    pub tangent_impulse: Vec3,
     /// Normal closing speed before the solve (m/s; positive when approaching), at the
     /// midpoint of the two anchors, for hit events.
     pub approach_speed: f32,
-    /// True while the contact sticks (static friction).
-    pub sticking: bool,
 }
 
 /// A persistent contact between two bodies (slots `a < b`).
@@ -121,6 +117,13 @@ pub(crate) struct Contact {
     pub sensor: bool,
     /// Touching this step (some point with `separation <= slop`): drives begin/end events.
     pub touching: bool,
+    /// Accumulated friction impulse of the patch, one sub-step (N·s, world vector in the
+    /// tangent plane).
+    pub friction_impulse: Vec3,
+    /// Accumulated twist impulse about the normal, one sub-step (N·m·s).
+    pub twist_impulse: f32,
+    /// True while the patch sticks (static friction).
+    pub sticking: bool,
     /// B's pose in A's frame when the manifold was last built.
     pub built_pose: Iso,
     /// Margin (m) the manifold was last built with; negative: never built, build now.
@@ -267,16 +270,18 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let mut write = 0usize;
     let len = contacts.len();
     let mut tested = 0u32;
+    let slots = contacts.as_mut_slice();
     for read in 0..len {
-        let Some(old) = contacts.get(read).copied() else {
+        // Compact in place: the contact moves down to `write` (at most one copy).
+        if read != write {
+            slots.swap(read, write);
+        }
+        let Some(c) = slots.get_mut(write) else {
             break;
         };
-        let next = update_one(&old, bodies, cfg, &mut tested);
-        touch_events(&old, next.as_ref(), bodies, events, report);
-        if let Some(c) = next {
-            if let Some(dst) = contacts.get_mut(write) {
-                *dst = c;
-            }
+        let (was_touching, kept) = (c.touching, update_one(c, bodies, cfg, &mut tested));
+        touch_events(was_touching, c, kept, bodies, events, report);
+        if kept {
             write += 1;
         }
     }
@@ -291,28 +296,29 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     }
 }
 
-/// One contact's update: `None` when it ends.
+/// One contact's update, in place: false when it ends.
 fn update_one<const N: usize>(
-    old: &Contact,
+    c: &mut Contact,
     bodies: &Pool<Body<'_>, N>,
     cfg: &WorldConfig,
     tested: &mut u32,
-) -> Option<Contact> {
-    let body_a = bodies.at(old.a as usize)?;
-    let body_b = bodies.at(old.b as usize)?;
+) -> bool {
+    c.hit_due = false;
+    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+        return false;
+    };
     if !body_a.fat.overlaps(&body_b.fat) {
-        return None;
+        return false;
     }
     if !may_collide(body_a, body_b) {
         // Two sleepers, or a sleeper on a static body: nothing moved, keep it.
-        let mut kept = *old;
-        kept.hit_due = false;
-        return Some(kept);
+        return true;
     }
     *tested = tested.saturating_add(1);
-    let mut c = narrow_phase(old, body_a, body_b, cfg);
-    c.hit_due = !c.sensor && c.len > 0 && (old.len == 0 || (c.touching && !old.touching));
-    Some(c)
+    let (had_points, was_touching) = (c.len > 0, c.touching);
+    narrow_phase(c, body_a, body_b, cfg);
+    c.hit_due = !c.sensor && c.len > 0 && (!had_points || (c.touching && !was_touching));
+    true
 }
 
 /// The fastest the surfaces of `a` and `b` can close (m/s): `|v_b − v_a| + |ω_a| R_a +
@@ -324,9 +330,9 @@ fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
         + b.angular_velocity.length() * b.shape.bounding_radius()
 }
 
-/// Stage 5 for one pair: reuse the manifold of `old` when the pair barely moved, else
+/// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
 /// build a new one and carry the impulses over (module docs).
-fn narrow_phase(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> Contact {
+fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
     let swept = |b: &Body<'_>| b.ccd && b.kind == crate::BodyKind::Dynamic;
     let reach = if swept(body_a) || swept(body_b) {
         cfg.dt * closing_bound(body_a, body_b)
@@ -335,10 +341,11 @@ fn narrow_phase(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &World
     };
     let margin = cfg.speculative_margin + reach;
     let b_in_a = body_a.pose.inv_mul(&body_b.pose);
-    if old.built_margin >= 0.0 {
-        let drift = relative_drift(&old.built_pose, &b_in_a, body_b.shape.bounding_radius());
-        if drift <= REUSE_SLACK && margin + drift <= old.built_margin {
-            return reused(old, body_a, body_b, cfg);
+    if c.built_margin >= 0.0 {
+        let drift = relative_drift(&c.built_pose, &b_in_a, body_b.shape.bounding_radius());
+        if drift <= REUSE_SLACK && margin + drift <= c.built_margin {
+            reuse(c, body_a, body_b, cfg);
+            return;
         }
     }
     let built_margin = margin + REUSE_SLACK;
@@ -349,27 +356,32 @@ fn narrow_phase(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &World
         &body_b.pose,
         built_margin,
     );
-    let mut c = Contact {
-        normal: Vec3::ZERO,
-        normal_local: Vec3::ZERO,
-        len: 0,
-        points: [ContactPoint::default(); 4],
-        touching: false,
-        built_pose: b_in_a,
-        built_margin,
-        ..*old
-    };
+    let old_points = c.points;
+    let old_len = c.len;
+    c.len = 0;
+    c.touching = false;
+    c.built_pose = b_in_a;
+    c.built_margin = built_margin;
     if let Some(m) = manifold {
-        if !fill_from_manifold(&mut c, &m, body_a, body_b, cfg) {
+        if fill_from_manifold(c, &m, body_a, body_b, cfg) {
+            let old = old_points.get(..usize::from(old_len)).unwrap_or(&[]);
+            warm_start(c, old, cfg.slop);
+        } else {
             // Something non-finite (coordinates near f32::MAX): no points, rebuild next step.
             c.len = 0;
             c.touching = false;
             c.built_margin = -1.0;
-        } else {
-            warm_start(&mut c, old, cfg.slop);
         }
     }
-    c
+    if c.len == 0 {
+        c.friction_impulse = Vec3::ZERO;
+        c.twist_impulse = 0.0;
+        c.sticking = false;
+    } else {
+        // The normal may have turned: the patch impulse stays in the tangent plane.
+        let n = c.normal;
+        c.friction_impulse -= n * c.friction_impulse.dot(n);
+    }
 }
 
 /// An upper bound (m) on how far any point of B (within `radius_b` of B's origin) moved
@@ -383,10 +395,9 @@ fn relative_drift(from: &Iso, to: &Iso, radius_b: f32) -> f32 {
     (to.position - from.position).length() + 2.0 * sin_half * radius_b
 }
 
-/// `old`'s manifold at the current poses: same points and impulses, separations and the
+/// The manifold at the current poses: same points and impulses, separations and the
 /// world normal recomputed (module docs).
-fn reused(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> Contact {
-    let mut c = *old;
+fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
     let n = body_a.pose.transform_vector(c.normal_local);
     c.normal = n;
     c.touching = false;
@@ -399,7 +410,6 @@ fn reused(old: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig
         p.approach_speed = (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(n);
         c.touching |= p.separation <= cfg.slop;
     }
-    c
 }
 
 /// Fill `c` (no points yet) from a manifold: world and local normal, body-frame anchors,
@@ -437,12 +447,10 @@ fn fill_from_manifold(
     true
 }
 
-/// Carry accumulated impulses and the sticking flag from `old` (the same pair, last step)
-/// to the points of `c`: by feature id first, then by the nearest anchors within
+/// Carry accumulated normal impulses from `old_points` (the same pair, last step) to the
+/// points of `c`: by feature id first, then by the nearest anchors within
 /// `2 · slop` for points whose id matched nothing. Each old point is used at most once.
-fn warm_start(c: &mut Contact, old: &Contact, slop: f32) {
-    let normal = c.normal;
-    let old_points = old.points();
+fn warm_start(c: &mut Contact, old_points: &[ContactPoint], slop: f32) {
     let len = usize::from(c.len);
     let new_points = c.points.get_mut(..len).unwrap_or(&mut []);
     let mut used = [false; 4];
@@ -451,7 +459,7 @@ fn warm_start(c: &mut Contact, old: &Contact, slop: f32) {
     for (p, done) in new_points.iter_mut().zip(matched.iter_mut()) {
         for (q, taken) in old_points.iter().zip(used.iter_mut()) {
             if !*taken && q.id == p.id {
-                inherit(p, q, normal);
+                inherit(p, q);
                 *taken = true;
                 *done = true;
                 break;
@@ -477,37 +485,33 @@ fn warm_start(c: &mut Contact, old: &Contact, slop: f32) {
         }
         if let Some((k, _)) = best {
             if let (Some(q), Some(taken)) = (old_points.get(k), used.get_mut(k)) {
-                inherit(p, q, normal);
+                inherit(p, q);
                 *taken = true;
             }
         }
     }
 }
 
-/// `p` takes over `q`'s accumulated impulses and sticking flag; the friction impulse loses
-/// its component along the (possibly turned) `normal`, so it stays in the tangent plane.
+/// `p` takes over `q`'s accumulated normal impulse.
 #[inline]
-fn inherit(p: &mut ContactPoint, q: &ContactPoint, normal: Vec3) {
+fn inherit(p: &mut ContactPoint, q: &ContactPoint) {
     p.normal_impulse = q.normal_impulse;
-    p.tangent_impulse = q.tangent_impulse - normal * q.tangent_impulse.dot(normal);
-    p.sticking = q.sticking;
 }
 
-/// Begin/end (or sensor enter/leave) when the touching state of the pair changes between
-/// `old` (last step) and `new` (this step; `None` when the contact was removed).
+/// Begin/end (or sensor enter/leave) when the touching state of contact `c` changed this
+/// step (`kept` false: the contact was removed).
 fn touch_events<const N: usize, const E: usize>(
-    old: &Contact,
-    new: Option<&Contact>,
+    was: bool,
+    c: &Contact,
+    kept: bool,
     bodies: &Pool<Body<'_>, N>,
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
-    let was = old.touching;
-    let is = new.is_some_and(|c| c.touching);
+    let is = kept && c.touching;
     if was == is {
         return;
     }
-    let c = new.unwrap_or(old);
     let (Some(a), Some(b)) = (
         bodies.handle_at(c.a as usize),
         bodies.handle_at(c.b as usize),
@@ -591,8 +595,6 @@ mod tests {
             local_a,
             local_b,
             normal_impulse: impulse,
-            tangent_impulse: Vec3::new(impulse, impulse, 0.0),
-            sticking: impulse > 2.5,
             ..ContactPoint::default()
         }
     }
@@ -627,12 +629,9 @@ mod tests {
             // Unknown id 0.011 from everything: nothing (beyond 2 slop).
             point(7, x(3.011), x(3.011), 0.0),
         ]);
-        warm_start(&mut new, &old, slop);
+        warm_start(&mut new, old.points(), slop);
         let got: [f32; 4] = core::array::from_fn(|i| new.points[i].normal_impulse);
         assert_eq!(got, [2.0, 3.0, 0.0, 0.0]);
-        assert!(new.points[1].sticking && !new.points[0].sticking);
-        // The friction impulse (2, 2, 0) loses its part along the normal +Y.
-        assert_eq!(new.points[0].tangent_impulse, Vec3::new(2.0, 0.0, 0.0));
     }
 
     /// Anchors must be near on both bodies: a point that slid 1 cm on B is not matched.
@@ -640,10 +639,10 @@ mod tests {
     fn fallback_needs_both_anchors_close() {
         let old = contact(&[point(1, Vec3::ZERO, Vec3::ZERO, 4.0)]);
         let mut new = contact(&[point(5, Vec3::ZERO, Vec3::new(0.0, 0.0, 0.0101), 0.0)]);
-        warm_start(&mut new, &old, 0.005);
+        warm_start(&mut new, old.points(), 0.005);
         assert_eq!(new.points[0].normal_impulse, 0.0);
         let mut near = contact(&[point(5, Vec3::ZERO, Vec3::new(0.0, 0.0, 0.0099), 0.0)]);
-        warm_start(&mut near, &old, 0.005);
+        warm_start(&mut near, old.points(), 0.005);
         assert_eq!(near.points[0].normal_impulse, 4.0);
     }
 

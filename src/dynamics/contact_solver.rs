@@ -55,37 +55,49 @@
 //! Contacts against static or kinematic bodies use twice the stiffness (Box2D v3's
 //! `staticSoftness`); the stiffness is capped at a quarter of the sub-step rate. As in
 //! Box2D v3, no slop is left in place: a stack of `k` boxes would sink `k` slops.
-//! Friction, rolling and twist run in the relax iterations only (also Box2D v3's
-//! choice): the biased iteration's velocities are not the ones the bodies keep.
 //!
-//! # Friction, static and kinetic
+//! # Patch friction, static and kinetic
 //!
-//! A 2D impulse `λ_t = λ_t,acc − (m_t₁ (Δv·t₁), m_t₂ (Δv·t₂))` clipped to the disc of
-//! radius `μ λ_n`, after the point's normal row. A sticking point uses
-//! `μ = static_friction`, a sliding one `kinetic_friction`:
+//! Friction acts once per manifold, at its *friction centre* `c` (the points' mean,
+//! weighted by last step's normal impulses), as a 2D impulse in the tangent plane with
+//! the coupled 2×2 effective mass `K⁻¹` of the two tangents at `c`:
 //!
-//! - at prepare a point *sticks* if it stuck last step, or its tangential speed is below
-//!   `stick_speed`, or it carried no normal impulse last step (a new or speculative
-//!   point has no friction state yet: the solve decides);
-//! - in the last relax iteration of the step, a sticking point that carried a normal
-//!   impulse into the step (not a new one, whose normal impulse is still building up),
-//!   that the static cone clipped *and* that still slips faster than `stick_speed`
-//!   after its row starts sliding, clipped to the kinetic cone at once; a sliding point whose slip fell below
-//!   `stick_speed` sticks again. (A clipped point alone proves nothing: Gauss-Seidel
-//!   loads the first points of a manifold up to their cones while the later ones hold
-//!   the rest. Testing the speed at prepare alone fails on a slope: gravity adds
-//!   `g h sin θ` of slip before every prepare, so a point that slid once would slide for
-//!   ever.)
+//! ```text
+//! λ_t = clip(λ_t,acc − K⁻¹ v_t(c),  μ Σλ_n)          (disc of the Coulomb cone)
+//! λ_τ = clamp(λ_τ,acc − m_τ (ω_b − ω_a)·n,  ±μ Σ λ_n,i d_i)   (twist: d_i = |p_i − c|)
+//! ```
 //!
-//! # Rolling resistance and twist friction
+//! (rapier's default "simplified" friction model works the same way). Per-point friction
+//! rows under Gauss-Seidel load the first points of a manifold before the others, and
+//! at a few iterations per step that bias tilts loaded boxes: tall stacks and walls
+//! buckled out of plane. One patch row sees the whole manifold at once, and costs three
+//! rows instead of eight. Friction, twist and rolling run in both the biased and the
+//! relax iterations (*departure* from Box2D v3's latest, which skips them in the biased
+//! one: the positions integrated after it then slide by what the push-out's lever arms
+//! turned into tangential speed, and a 100-row wall crept sideways).
+//!
+//! A sticking patch uses `μ = static_friction`, a sliding one `kinetic_friction`:
+//!
+//! - at prepare a patch *sticks* if it stuck last step, or its tangential speed is
+//!   below `stick_speed`, or it carried no normal impulse last step (a new or
+//!   speculative manifold has no friction state yet: the solve decides);
+//! - in the last relax iteration of the step, a sticking patch that carried a normal
+//!   impulse into the step (a new one's normal impulse is still building up), that the
+//!   static cone clipped *and* that still slips faster than `stick_speed` after its row
+//!   starts sliding, clipped to the kinetic cone at once; a sliding patch whose slip fell
+//!   below `stick_speed` sticks again. (Testing the speed at prepare alone fails on a
+//!   slope: gravity adds `g h sin θ` of slip before every prepare, so a patch that slid
+//!   once would slide for ever.)
+//!
+//! # Rolling resistance and twist friction of small manifolds
 //!
 //! Two angular rows along `t₁, t₂` resist the relative rolling `(ω_b − ω_a)` of
 //! manifolds with one or two points, clipped to the disc of radius
-//! `rolling_resistance · Σλ_n · ℓ`; one angular row along `n` resists the relative spin
-//! of single-point manifolds, clipped to `twist_friction · Σλ_n · ℓ`. `ℓ` is the lever
-//! arm `|r|` of the (smaller) moving body to the first point; the effective mass along
-//! an axis `d` is `1 / (d·(I_a⁻¹ + I_b⁻¹) d)`. A flat patch of three or more points does
-//! not roll, and two or more points already resist twist through their friction.
+//! `rolling_resistance · Σλ_n · ℓ`; a single-point manifold's twist row is clipped to
+//! `twist_friction · Σλ_n · ℓ` (it has no spread of points to resist twist with). `ℓ` is
+//! the lever arm `|r|` of the (smaller) moving body to the first point; the effective
+//! mass along an axis `d` is `1 / (d·(I_a⁻¹ + I_b⁻¹) d)`. A flat patch of three or more
+//! points does not roll.
 //!
 //! # Collision pass (restitution)
 //!
@@ -153,7 +165,7 @@ impl Softness {
     }
 }
 
-/// One contact point of a constraint (module docs for the symbols).
+/// One contact point of a constraint: its normal row (module docs for the symbols).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ConstraintPoint {
     /// Core anchor on A relative to A's centre of mass, in A's body axes (m): the
@@ -165,14 +177,10 @@ pub(crate) struct ConstraintPoint {
     pub core_a: Vec3,
     /// Core anchor on B at prepare (world, m).
     pub core_b: Vec3,
-    /// Lever arm on A at prepare (world, m): the surface point, for the Jacobians.
-    pub r_a: Vec3,
-    /// Lever arm on B at prepare (world, m).
-    pub r_b: Vec3,
     /// `n·(c_b − c_a) − ρ_a − ρ_b` at prepare (m): with the core anchors' motion it gives
     /// the separation.
     pub adjusted_separation: f32,
-    /// `r_a × n`.
+    /// `r_a × n`, with `r_a` the surface point's lever arm on A at prepare.
     pub rn_a: Vec3,
     /// `r_b × n`.
     pub rn_b: Vec3,
@@ -180,22 +188,12 @@ pub(crate) struct ConstraintPoint {
     pub in_a: Vec3,
     /// `I_b⁻¹ (r_b × n)`.
     pub in_b: Vec3,
-    /// `r_a × t₁`, `r_a × t₂`.
-    pub rt_a: [Vec3; 2],
-    /// `r_b × t₁`, `r_b × t₂`.
-    pub rt_b: [Vec3; 2],
-    /// `I_a⁻¹ (r_a × tᵢ)`.
-    pub it_a: [Vec3; 2],
-    /// `I_b⁻¹ (r_b × tᵢ)`.
-    pub it_b: [Vec3; 2],
     /// Effective mass along the normal (kg).
     pub normal_mass: f32,
-    /// Effective masses along the tangents (kg).
-    pub tangent_mass: [f32; 2],
     /// Accumulated normal impulse of a sub-step (N·s).
     pub normal_impulse: f32,
-    /// Accumulated friction impulse along the tangents (N·s).
-    pub tangent_impulse: [f32; 2],
+    /// Distance from the friction centre (m): the point's lever against twist.
+    pub twist_arm: f32,
     /// Separation at prepare (m).
     pub separation0: f32,
     /// Separation at the last row solved (m).
@@ -207,14 +205,10 @@ pub(crate) struct ConstraintPoint {
     pub normal_speed0: f32,
     /// Bounced by the collision pass before the sub-steps.
     pub bounced: bool,
-    /// The point carried a normal impulse into this step (it is not new): only such a
-    /// point may start sliding, once its normal impulse has settled.
-    pub established: bool,
-    /// True while the point sticks.
-    pub sticking: bool,
 }
 
-/// The rows of one manifold for one step.
+/// The rows of one manifold for one step: a normal row per point, one friction patch
+/// (two tangent rows and a twist row at the friction centre), rolling rows.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct ContactConstraint {
     /// Index of the contact in the contact list.
@@ -239,26 +233,44 @@ pub(crate) struct ContactConstraint {
     pub len: u8,
     /// The points.
     pub points: [ConstraintPoint; 4],
+    /// `r_a(c) × tᵢ` at the friction centre `c`.
+    pub rt_a: [Vec3; 2],
+    /// `r_b(c) × tᵢ`.
+    pub rt_b: [Vec3; 2],
+    /// `I_a⁻¹ (r_a(c) × tᵢ)`.
+    pub it_a: [Vec3; 2],
+    /// `I_b⁻¹ (r_b(c) × tᵢ)`.
+    pub it_b: [Vec3; 2],
+    /// The inverse of the 2×2 tangent effective mass matrix at `c`: `[xx, xy, yy]`.
+    pub tangent_mass: [f32; 3],
+    /// Accumulated friction impulse along the tangents (N·s).
+    pub tangent_impulse: [f32; 2],
+    /// `I_a⁻¹ t₁, I_a⁻¹ t₂, I_a⁻¹ n` (rolling and twist rows).
+    pub ia_axes: [Vec3; 3],
+    /// `I_b⁻¹ t₁, I_b⁻¹ t₂, I_b⁻¹ n`.
+    pub ib_axes: [Vec3; 3],
+    /// Effective masses of the rolling (t₁, t₂) and twist (n) rows (kg·m²).
+    pub axis_mass: [f32; 3],
+    /// Accumulated rolling (t₁, t₂) and twist (n) angular impulses (N·m·s).
+    pub angular_impulse: [f32; 3],
     /// Static and kinetic friction coefficients.
     pub friction: [f32; 2],
     /// Coefficient of restitution.
     pub restitution: f32,
     /// Largest rolling impulse per unit of total normal impulse (m), 0 when off.
     pub rolling: f32,
-    /// Largest twist impulse per unit of total normal impulse (m), 0 when off.
+    /// Largest twist impulse per unit of total normal impulse of a single-point
+    /// manifold (m), 0 when off.
     pub twist: f32,
-    /// `I_a⁻¹ t₁, I_a⁻¹ t₂, I_a⁻¹ n` (rolling and twist rows).
-    pub ia_axes: [Vec3; 3],
-    /// `I_b⁻¹ t₁, I_b⁻¹ t₂, I_b⁻¹ n`.
-    pub ib_axes: [Vec3; 3],
-    /// Effective masses of the rolling and twist rows (kg·m²).
-    pub axis_mass: [f32; 3],
-    /// Accumulated rolling (t₁, t₂) and twist (n) angular impulses (N·m·s).
-    pub angular_impulse: [f32; 3],
     /// Soft coefficients of the normal rows.
     pub softness: Softness,
     /// `ρ_a + ρ_b`: the shapes' rounding radii (sphere and capsule radius, 0 otherwise).
     pub radius_sum: f32,
+    /// True while the patch sticks (static friction).
+    pub sticking: bool,
+    /// The manifold carried a normal impulse into this step (it is not new): only such a
+    /// patch may start sliding, once its normal impulse has settled.
+    pub established: bool,
 }
 
 /// A sleeping dynamic body that an awake dynamic or moving kinematic body touches or
@@ -316,20 +328,32 @@ pub(crate) fn has_rigid_partner<const N: usize>(c: &Contact, bodies: &Pool<Body<
     rigid(c.a) || rigid(c.b)
 }
 
-/// The constraint of contact `index`, or `None` when it does not push: a sensor, no
-/// point, or no moving dynamic body.
+/// `1 / k` for `k > 0` finite, else 0 (nothing moves along that row).
+#[inline]
+fn inverse_or_zero(k: f32) -> f32 {
+    if k > 0.0 && k.is_finite() {
+        1.0 / k
+    } else {
+        0.0
+    }
+}
+
+/// Fill `k` with the constraint of contact `index`; false when it does not push: a
+/// sensor, no point, or no moving dynamic body.
 pub(crate) fn prepare<const N: usize, const C: usize>(
     c: &Contact,
     index: u32,
     bodies: &Pool<Body<'_>, N>,
     solver: &Solver<N, C>,
     cfg: &WorldConfig,
-) -> Option<ContactConstraint> {
+    k: &mut ContactConstraint,
+) -> bool {
     if c.sensor || c.len == 0 {
-        return None;
+        return false;
     }
-    let body_a = bodies.at(c.a as usize)?;
-    let body_b = bodies.at(c.b as usize)?;
+    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+        return false;
+    };
     let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
     let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
     let sa = solver.bodies.get(ia as usize);
@@ -337,7 +361,7 @@ pub(crate) fn prepare<const N: usize, const C: usize>(
     let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
     let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
     if m_a <= 0.0 && m_b <= 0.0 {
-        return None;
+        return false;
     }
     let h = cfg.substep();
     let n = c.normal;
@@ -352,9 +376,9 @@ pub(crate) fn prepare<const N: usize, const C: usize>(
     let rot_b = sb.map(|s| s.rot);
     let (va, wa) = sa.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
     let (vb, wb) = sb.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
-    let stick2 = cfg.stick_speed * cfg.stick_speed;
     let m = c.material;
-    let mut k = ContactConstraint {
+    let (rho_a, rho_b) = (body_a.shape.radius(), body_b.shape.radius());
+    *k = ContactConstraint {
         contact: index,
         slot_a: c.a,
         slot_b: c.b,
@@ -364,17 +388,26 @@ pub(crate) fn prepare<const N: usize, const C: usize>(
         inv_mass_b: m_b,
         normal: n,
         tangents: [t1, t2],
-        len: 0,
         friction: [m.static_friction, m.kinetic_friction],
         restitution: m.restitution,
         softness: Softness::new(hertz, cfg.contact_damping_ratio, h),
+        radius_sum: rho_a + rho_b,
         ..ContactConstraint::default()
     };
-    let (rho_a, rho_b) = (body_a.shape.radius(), body_b.shape.radius());
-    k.radius_sum = rho_a + rho_b;
+    // Warm-start impulses are bounded: none may change a normal speed by more than twice
+    // the speed limit plus the push-out (a real one never comes near). So no stored
+    // impulse, however it came to be (a crafted snapshot included), can send a body to a
+    // non-finite speed.
+    let speed_bound = 2.0 * cfg.max_linear_speed + cfg.max_push_speed;
+    let mut weight = 0.0f32;
+    let mut weighted = Vec3::ZERO;
+    let mut plain = Vec3::ZERO;
+    let mut carried = 0.0f32;
     for (dst, p) in k.points.iter_mut().zip(c.points()) {
-        let r_a = body_a.pose.transform_point(p.local_a) - center_a;
-        let r_b = body_b.pose.transform_point(p.local_b) - center_b;
+        let p_a = body_a.pose.transform_point(p.local_a);
+        let p_b = body_b.pose.transform_point(p.local_b);
+        let r_a = p_a - center_a;
+        let r_b = p_b - center_b;
         // The cores' points: a sphere's is its centre, so its spin does not carry the
         // anchor away from the contact.
         let core_a = r_a - n * rho_a;
@@ -383,98 +416,156 @@ pub(crate) fn prepare<const N: usize, const C: usize>(
         let rn_b = r_b.cross(n);
         let in_a = i_a.mul_vec(rn_a);
         let in_b = i_b.mul_vec(rn_b);
-        let rt_a = [r_a.cross(t1), r_a.cross(t2)];
-        let rt_b = [r_b.cross(t1), r_b.cross(t2)];
-        let it_a = [i_a.mul_vec(rt_a[0]), i_a.mul_vec(rt_a[1])];
-        let it_b = [i_b.mul_vec(rt_b[0]), i_b.mul_vec(rt_b[1])];
-        let mass = |ra: Vec3, ina: Vec3, rb: Vec3, inb: Vec3| {
-            let kk = m_a + m_b + ra.dot(ina) + rb.dot(inb);
-            if kk > 0.0 && kk.is_finite() {
-                1.0 / kk
-            } else {
-                0.0
-            }
-        };
-        let dv = (vb + wb.cross(r_b)) - (va + wa.cross(r_a));
-        let vn = dv.dot(n);
-        let slip = dv - n * vn;
-        let normal_mass = mass(rn_a, in_a, rn_b, in_b);
-        // Warm-start impulses are bounded: none may change the normal speed by more than
-        // twice the speed limit plus the push-out (a real one never comes near), and the
-        // friction impulse stays in the static cone. So no stored impulse, however it
-        // came to be (a crafted snapshot included), can send a body to a non-finite speed.
-        let max_normal = normal_mass * (2.0 * cfg.max_linear_speed + cfg.max_push_speed);
-        let normal_impulse = scalar::min(p.normal_impulse, max_normal);
-        let tangent = p.tangent_impulse - n * p.tangent_impulse.dot(n);
-        let (tangent_impulse, _) = clip_to_disc(
-            [tangent.dot(t1), tangent.dot(t2)],
-            m.static_friction * normal_impulse,
-        );
+        let normal_mass = inverse_or_zero(m_a + m_b + rn_a.dot(in_a) + rn_b.dot(in_b));
+        let vn = ((vb + wb.cross(r_b)) - (va + wa.cross(r_a))).dot(n);
+        let normal_impulse = scalar::min(p.normal_impulse, normal_mass * speed_bound);
         *dst = ConstraintPoint {
             local_a: rot_a.map_or(core_a, |r| r.transpose_mul_vec(core_a)),
             local_b: rot_b.map_or(core_b, |r| r.transpose_mul_vec(core_b)),
             core_a,
             core_b,
-            r_a,
-            r_b,
             adjusted_separation: n.dot(center_b - center_a) - k.radius_sum,
             rn_a,
             rn_b,
             in_a,
             in_b,
-            rt_a,
-            rt_b,
-            it_a,
-            it_b,
             normal_mass,
-            tangent_mass: [
-                mass(rt_a[0], it_a[0], rt_b[0], it_b[0]),
-                mass(rt_a[1], it_a[1], rt_b[1], it_b[1]),
-            ],
             normal_impulse,
-            tangent_impulse,
+            twist_arm: 0.0,
             separation0: p.separation,
             separation: p.separation,
             total_impulse: 0.0,
             normal_speed0: vn,
             bounced: false,
-            established: normal_impulse > 0.0,
-            sticking: p.sticking || slip.length_squared() < stick2 || p.normal_impulse <= 0.0,
         };
+        let mid = (p_a + p_b) * 0.5;
+        weighted += mid * normal_impulse;
+        weight += normal_impulse;
+        plain += mid;
+        carried += normal_impulse;
         k.len += 1;
     }
-    prepare_angular_rows(&mut k, &i_a, &i_b, m.rolling_resistance, m.twist_friction);
-    Some(k)
+    let count = f32::from(k.len);
+    let center = if weight > 0.0 {
+        weighted * (1.0 / weight)
+    } else {
+        plain * (1.0 / count)
+    };
+    for p in k.points.iter_mut().take(usize::from(k.len)) {
+        let mid = (center_a + p.core_a + n * rho_a + center_b + p.core_b - n * rho_b) * 0.5;
+        p.twist_arm = (mid - center).length();
+    }
+    prepare_patch(
+        k,
+        c,
+        center - center_a,
+        center - center_b,
+        &i_a,
+        &i_b,
+        va,
+        wa,
+        vb,
+        wb,
+        cfg,
+    );
+    k.established = carried > 0.0;
+    prepare_angular_rows(
+        k,
+        &i_a,
+        &i_b,
+        center - center_a,
+        center - center_b,
+        m.rolling_resistance,
+        m.twist_friction,
+    );
+    true
 }
 
-/// Rolling rows for manifolds of one or two points, the twist row for single points
-/// (module docs), with their lever arm and effective masses.
+/// The friction patch at the centre (lever arms `r_a`, `r_b`): Jacobians, the inverse
+/// tangent mass matrix, the warm-start impulse (kept in the static cone) and the
+/// sticking state (module docs).
+#[allow(clippy::too_many_arguments)]
+fn prepare_patch(
+    k: &mut ContactConstraint,
+    c: &Contact,
+    r_a: Vec3,
+    r_b: Vec3,
+    i_a: &Mat3,
+    i_b: &Mat3,
+    va: Vec3,
+    wa: Vec3,
+    vb: Vec3,
+    wb: Vec3,
+    cfg: &WorldConfig,
+) {
+    let [t1, t2] = k.tangents;
+    let n = k.normal;
+    k.rt_a = [r_a.cross(t1), r_a.cross(t2)];
+    k.rt_b = [r_b.cross(t1), r_b.cross(t2)];
+    k.it_a = [i_a.mul_vec(k.rt_a[0]), i_a.mul_vec(k.rt_a[1])];
+    k.it_b = [i_b.mul_vec(k.rt_b[0]), i_b.mul_vec(k.rt_b[1])];
+    let m = k.inv_mass_a + k.inv_mass_b;
+    let kxx = m + k.rt_a[0].dot(k.it_a[0]) + k.rt_b[0].dot(k.it_b[0]);
+    let kyy = m + k.rt_a[1].dot(k.it_a[1]) + k.rt_b[1].dot(k.it_b[1]);
+    let kxy = k.rt_a[0].dot(k.it_a[1]) + k.rt_b[0].dot(k.it_b[1]);
+    let det = kxx * kyy - kxy * kxy;
+    k.tangent_mass = if det > 0.0 && det.is_finite() {
+        let inv = 1.0 / det;
+        [kyy * inv, -kxy * inv, kxx * inv]
+    } else {
+        [inverse_or_zero(kxx), 0.0, inverse_or_zero(kyy)]
+    };
+    let total: f32 = k
+        .points
+        .iter()
+        .take(usize::from(k.len))
+        .map(|p| p.normal_impulse)
+        .sum();
+    let tangent = c.friction_impulse - n * c.friction_impulse.dot(n);
+    let (clipped, _) = clip_to_disc([tangent.dot(t1), tangent.dot(t2)], k.friction[0] * total);
+    k.tangent_impulse = clipped;
+    let dv = (vb + wb.cross(r_b)) - (va + wa.cross(r_a));
+    let slip = dv - n * dv.dot(n);
+    k.sticking =
+        c.sticking || slip.length_squared() < cfg.stick_speed * cfg.stick_speed || total <= 0.0;
+    let twist_limit = k.friction[0] * twist_lever_sum(k);
+    k.angular_impulse[2] = scalar::clamp(c.twist_impulse, -twist_limit, twist_limit);
+}
+
+/// `Σ λ_n,i d_i`: the twist the patch's normal impulses can hold per unit of friction.
+#[inline]
+fn twist_lever_sum(k: &ContactConstraint) -> f32 {
+    let mut s = 0.0f32;
+    for p in k.points.iter().take(usize::from(k.len)) {
+        s += p.normal_impulse * p.twist_arm;
+    }
+    s
+}
+
+/// Rolling rows for manifolds of one or two points, the single-point twist coefficient,
+/// and the angular effective masses (module docs).
+#[allow(clippy::too_many_arguments)]
 fn prepare_angular_rows(
     k: &mut ContactConstraint,
     i_a: &Mat3,
     i_b: &Mat3,
+    r_a: Vec3,
+    r_b: Vec3,
     rolling: f32,
     twist: f32,
 ) {
-    let Some(p) = k.points.first() else {
-        return;
-    };
     let lever = match (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0) {
-        (true, true) => scalar::min(p.r_a.length(), p.r_b.length()),
-        (true, false) => p.r_a.length(),
-        _ => p.r_b.length(),
+        (true, true) => scalar::min(r_a.length(), r_b.length()),
+        (true, false) => r_a.length(),
+        _ => r_b.length(),
     };
     k.rolling = if k.len <= 2 { rolling * lever } else { 0.0 };
     k.twist = if k.len == 1 { twist * lever } else { 0.0 };
-    if k.rolling <= 0.0 && k.twist <= 0.0 {
-        return;
-    }
     let [t1, t2] = k.tangents;
     let axes = [t1, t2, k.normal];
     for (i, d) in axes.iter().enumerate() {
         let ia = i_a.mul_vec(*d);
         let ib = i_b.mul_vec(*d);
-        let kk = d.dot(ia) + d.dot(ib);
         if let (Some(x), Some(y), Some(m)) = (
             k.ia_axes.get_mut(i),
             k.ib_axes.get_mut(i),
@@ -482,16 +573,12 @@ fn prepare_angular_rows(
         ) {
             *x = ia;
             *y = ib;
-            *m = if kk > 0.0 && kk.is_finite() {
-                1.0 / kk
-            } else {
-                0.0
-            };
+            *m = inverse_or_zero(d.dot(ia) + d.dot(ib));
         }
     }
 }
 
-/// Velocities of the two solver bodies of a constraint (zero for [`NONE`]).
+/// Velocities of a solver body (zero for [`NONE`]).
 #[inline]
 fn velocities(bodies: &[SolverBody], i: u32) -> (Vec3, Vec3) {
     bodies
@@ -536,14 +623,15 @@ impl Pair {
         n.dot(self.vb - self.va) + self.wb.dot(p.rn_b) - self.wa.dot(p.rn_a)
     }
 
-    /// Tangential speed along `t[i]` at point `p`.
+    /// Tangential speeds along `t₁, t₂` at the friction centre.
     #[inline]
-    fn tangent_speed(&self, t: Vec3, p: &ConstraintPoint, i: usize) -> f32 {
-        let (rb, ra) = match (p.rt_b.get(i), p.rt_a.get(i)) {
-            (Some(rb), Some(ra)) => (*rb, *ra),
-            _ => return 0.0,
-        };
-        t.dot(self.vb - self.va) + self.wb.dot(rb) - self.wa.dot(ra)
+    fn tangent_speeds(&self, k: &ContactConstraint) -> [f32; 2] {
+        let dv = self.vb - self.va;
+        let [t1, t2] = k.tangents;
+        [
+            t1.dot(dv) + self.wb.dot(k.rt_b[0]) - self.wa.dot(k.rt_a[0]),
+            t2.dot(dv) + self.wb.dot(k.rt_b[1]) - self.wa.dot(k.rt_a[1]),
+        ]
     }
 
     /// Apply `λ` along the normal at `p`.
@@ -556,15 +644,15 @@ impl Pair {
         self.wb += p.in_b * lambda;
     }
 
-    /// Apply `(λ₁, λ₂)` along the tangents at `p`.
+    /// Apply `(λ₁, λ₂)` along the tangents at the friction centre.
     #[inline]
-    fn push_tangent(&mut self, k: &ContactConstraint, p: &ConstraintPoint, l: [f32; 2]) {
+    fn push_tangent(&mut self, k: &ContactConstraint, l: [f32; 2]) {
         let [t1, t2] = k.tangents;
         let j = t1 * l[0] + t2 * l[1];
         self.va -= j * k.inv_mass_a;
-        self.wa -= p.it_a[0] * l[0] + p.it_a[1] * l[1];
+        self.wa -= k.it_a[0] * l[0] + k.it_a[1] * l[1];
         self.vb += j * k.inv_mass_b;
-        self.wb += p.it_b[0] * l[0] + p.it_b[1] * l[1];
+        self.wb += k.it_b[0] * l[0] + k.it_b[1] * l[1];
     }
 
     /// Apply an angular impulse `λ` about axis `i` (t₁, t₂, n).
@@ -583,13 +671,11 @@ pub(crate) fn warm_start(constraints: &[ContactConstraint], bodies: &mut [Solver
         let mut pair = Pair::load(k, bodies);
         for p in k.points.iter().take(usize::from(k.len)) {
             pair.push_normal(k, p, p.normal_impulse);
-            pair.push_tangent(k, p, p.tangent_impulse);
         }
-        for i in 0..3 {
-            if let Some(l) = k.angular_impulse.get(i) {
-                if *l != 0.0 {
-                    pair.push_angular(k, i, *l);
-                }
+        pair.push_tangent(k, k.tangent_impulse);
+        for (i, l) in k.angular_impulse.iter().enumerate() {
+            if *l != 0.0 {
+                pair.push_angular(k, i, *l);
             }
         }
         pair.save(k, bodies);
@@ -615,8 +701,8 @@ fn current_separation(k: &ContactConstraint, p: &ConstraintPoint, bodies: &[Solv
 }
 
 /// One iteration over every constraint in order: normal rows (soft with `use_bias`,
-/// rigid without), friction, rolling and twist (module docs). `last` marks the last
-/// relax iteration of the step, where stick/slip changes.
+/// rigid without), the friction patch, rolling and twist (module docs). `last` marks the
+/// last relax iteration of the step, where stick/slip changes.
 pub(crate) fn solve(
     constraints: &mut [ContactConstraint],
     bodies: &mut [SolverBody],
@@ -643,12 +729,13 @@ fn solve_constraint(
     let soft = k.softness;
     let len = usize::from(k.len);
     let mut total_normal = 0.0f32;
+    let mut twist_levers = 0.0f32;
     // Normal rows.
     for i in 0..len {
-        let Some(p) = k.points.get(i).copied() else {
+        let Some(p) = k.points.get(i) else {
             break;
         };
-        let s = current_separation(k, &p, bodies);
+        let s = current_separation(k, p, bodies);
         let (bias, mass_scale, impulse_scale) = if s > 0.0 {
             (s * inv_h, 1.0, 0.0)
         } else if use_bias {
@@ -657,84 +744,93 @@ fn solve_constraint(
         } else {
             (0.0, 1.0, 0.0)
         };
-        let vn = pair.normal_speed(n, &p);
+        let vn = pair.normal_speed(n, p);
         let lambda = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
         let new = scalar::max(p.normal_impulse + lambda, 0.0);
         let delta = new - p.normal_impulse;
-        pair.push_normal(k, &p, delta);
+        pair.push_normal(k, p, delta);
+        total_normal += new;
+        twist_levers += new * p.twist_arm;
         if let Some(q) = k.points.get_mut(i) {
             q.normal_impulse = new;
             q.total_impulse += delta;
             q.separation = s;
         }
-        total_normal += new;
     }
-    if use_bias {
-        pair.save(k, bodies);
+    solve_patch(k, &mut pair, cfg, total_normal, twist_levers, last);
+    solve_rolling(k, &mut pair, total_normal);
+    pair.save(k, bodies);
+}
+
+/// The friction patch: tangent rows in the Coulomb disc, twist, stick/slip (module docs).
+fn solve_patch(
+    k: &mut ContactConstraint,
+    pair: &mut Pair,
+    cfg: &WorldConfig,
+    total_normal: f32,
+    twist_levers: f32,
+    last: bool,
+) {
+    let [mu_s, mu_k] = k.friction;
+    let mu = if k.sticking { mu_s } else { mu_k };
+    let v = pair.tangent_speeds(k);
+    let [mxx, mxy, myy] = k.tangent_mass;
+    let old = k.tangent_impulse;
+    let wanted = [
+        old[0] - (mxx * v[0] + mxy * v[1]),
+        old[1] - (mxy * v[0] + myy * v[1]),
+    ];
+    let (mut new, clipped) = clip_to_disc(wanted, mu * total_normal);
+    pair.push_tangent(k, [new[0] - old[0], new[1] - old[1]]);
+    if last {
+        let after = pair.tangent_speeds(k);
+        let slip2 = after[0] * after[0] + after[1] * after[1];
+        let stick2 = cfg.stick_speed * cfg.stick_speed;
+        if k.sticking && k.established && clipped && slip2 >= stick2 {
+            // The static cone gave way: slide, at the kinetic cone from now on.
+            k.sticking = false;
+            let (kinetic, _) = clip_to_disc(new, mu_k * total_normal);
+            pair.push_tangent(k, [kinetic[0] - new[0], kinetic[1] - new[1]]);
+            new = kinetic;
+        } else if !k.sticking && slip2 < stick2 {
+            k.sticking = true;
+        }
+    }
+    k.tangent_impulse = new;
+    // Twist about the normal at the centre: the points' spread, or a single point's
+    // twist friction.
+    let mu = if k.sticking { mu_s } else { mu_k };
+    let limit = mu * twist_levers + k.twist * total_normal;
+    if limit > 0.0 {
+        let n = k.normal;
+        let old = k.angular_impulse[2];
+        let new = scalar::clamp(
+            old - k.axis_mass[2] * (pair.wb - pair.wa).dot(n),
+            -limit,
+            limit,
+        );
+        pair.push_angular(k, 2, new - old);
+        k.angular_impulse[2] = new;
+    }
+}
+
+/// Rolling resistance about the tangents (manifolds of one or two points).
+fn solve_rolling(k: &mut ContactConstraint, pair: &mut Pair, total_normal: f32) {
+    if k.rolling <= 0.0 {
         return;
     }
-    // Friction rows.
-    let [mu_s, mu_k] = k.friction;
-    let stick2 = cfg.stick_speed * cfg.stick_speed;
     let [t1, t2] = k.tangents;
-    for i in 0..len {
-        let Some(mut p) = k.points.get(i).copied() else {
-            break;
-        };
-        let mu = if p.sticking { mu_s } else { mu_k };
-        let v1 = pair.tangent_speed(t1, &p, 0);
-        let v2 = pair.tangent_speed(t2, &p, 1);
-        let old = p.tangent_impulse;
-        let wanted = [
-            old[0] - p.tangent_mass[0] * v1,
-            old[1] - p.tangent_mass[1] * v2,
-        ];
-        let (mut new, clipped) = clip_to_disc(wanted, mu * p.normal_impulse);
-        pair.push_tangent(k, &p, [new[0] - old[0], new[1] - old[1]]);
-        if last {
-            let slip2 = {
-                let a = pair.tangent_speed(t1, &p, 0);
-                let b = pair.tangent_speed(t2, &p, 1);
-                a * a + b * b
-            };
-            if p.sticking && p.established && clipped && slip2 >= stick2 {
-                // The static cone gave way: slide, at the kinetic cone from now on.
-                p.sticking = false;
-                let (kinetic, _) = clip_to_disc(new, mu_k * p.normal_impulse);
-                pair.push_tangent(k, &p, [kinetic[0] - new[0], kinetic[1] - new[1]]);
-                new = kinetic;
-            } else if !p.sticking && slip2 < stick2 {
-                p.sticking = true;
-            }
-        }
-        p.tangent_impulse = new;
-        if let Some(q) = k.points.get_mut(i) {
-            *q = p;
-        }
-    }
-    // Rolling resistance (t₁, t₂) and twist friction (n).
-    if k.rolling > 0.0 || k.twist > 0.0 {
-        let dw = pair.wb - pair.wa;
-        let [m1, m2, m3] = k.axis_mass;
-        if k.rolling > 0.0 {
-            let old = [k.angular_impulse[0], k.angular_impulse[1]];
-            let wanted = [old[0] - m1 * dw.dot(t1), old[1] - m2 * dw.dot(t2)];
-            let (new, _) = clip_to_disc(wanted, k.rolling * total_normal);
-            pair.push_angular(k, 0, new[0] - old[0]);
-            pair.push_angular(k, 1, new[1] - old[1]);
-            k.angular_impulse[0] = new[0];
-            k.angular_impulse[1] = new[1];
-        }
-        if k.twist > 0.0 {
-            let dw = pair.wb - pair.wa;
-            let old = k.angular_impulse[2];
-            let max = k.twist * total_normal;
-            let new = scalar::clamp(old - m3 * dw.dot(n), -max, max);
-            pair.push_angular(k, 2, new - old);
-            k.angular_impulse[2] = new;
-        }
-    }
-    pair.save(k, bodies);
+    let dw = pair.wb - pair.wa;
+    let old = [k.angular_impulse[0], k.angular_impulse[1]];
+    let wanted = [
+        old[0] - k.axis_mass[0] * dw.dot(t1),
+        old[1] - k.axis_mass[1] * dw.dot(t2),
+    ];
+    let (new, _) = clip_to_disc(wanted, k.rolling * total_normal);
+    pair.push_angular(k, 0, new[0] - old[0]);
+    pair.push_angular(k, 1, new[1] - old[1]);
+    k.angular_impulse[0] = new[0];
+    k.angular_impulse[1] = new[1];
 }
 
 /// `v` shortened to length at most `radius` (a non-positive radius gives zero), and
@@ -776,6 +872,8 @@ pub(crate) fn bounce(
 }
 
 /// One constraint of one sweep of the collision pass: true when some point bounced.
+/// The transient impulse makes the colliding points separate at `e · approach`, with
+/// patch friction in the cone of that impulse.
 fn bounce_constraint(
     k: &mut ContactConstraint,
     bodies: &mut [SolverBody],
@@ -811,28 +909,20 @@ fn bounce_constraint(
         return false;
     }
     let [mu_s, mu_k] = k.friction;
-    let [t1, t2] = k.tangents;
+    let mu = if k.sticking { mu_s } else { mu_k };
+    let [mxx, mxy, myy] = k.tangent_mass;
     let mut normal = [0.0f32; 4];
-    let mut tangent = [[0.0f32; 2]; 4];
+    let mut tangent = [0.0f32; 2];
     for _ in 0..BOUNCE_ITERATIONS {
-        for i in 0..len {
-            let (Some(p), Some(true), Some(lambda), Some(tau)) = (
-                k.points.get(i),
-                hit.get(i).copied(),
-                normal.get(i),
-                tangent.get_mut(i),
-            ) else {
-                continue;
-            };
-            let mu = if p.sticking { mu_s } else { mu_k };
-            let wanted = [
-                tau[0] - p.tangent_mass[0] * pair.tangent_speed(t1, p, 0),
-                tau[1] - p.tangent_mass[1] * pair.tangent_speed(t2, p, 1),
-            ];
-            let (new, _) = clip_to_disc(wanted, mu * *lambda);
-            pair.push_tangent(k, p, [new[0] - tau[0], new[1] - tau[1]]);
-            *tau = new;
-        }
+        let v = pair.tangent_speeds(k);
+        let total: f32 = normal.iter().sum();
+        let wanted = [
+            tangent[0] - (mxx * v[0] + mxy * v[1]),
+            tangent[1] - (mxy * v[0] + myy * v[1]),
+        ];
+        let (new, _) = clip_to_disc(wanted, mu * total);
+        pair.push_tangent(k, [new[0] - tangent[0], new[1] - tangent[1]]);
+        tangent = new;
         for i in 0..len {
             let (Some(p), Some(true), Some(t), Some(lambda)) = (
                 k.points.get(i),
@@ -896,8 +986,9 @@ pub(crate) fn store(constraints: &[ContactConstraint], contacts: &mut [Contact])
             .zip(k.points.iter().take(usize::from(k.len)))
         {
             q.normal_impulse = p.normal_impulse;
-            q.tangent_impulse = t1 * p.tangent_impulse[0] + t2 * p.tangent_impulse[1];
-            q.sticking = p.sticking;
         }
+        c.friction_impulse = t1 * k.tangent_impulse[0] + t2 * k.tangent_impulse[1];
+        c.twist_impulse = k.angular_impulse[2];
+        c.sticking = k.sticking;
     }
 }

@@ -27,8 +27,9 @@
 //! # Checksum
 //! [`World::checksum`] is FNV-1a 64 over a canonical stream: the step counter; for every
 //! live body in slot order its slot, generation, pose, velocities, awake flag and sleep
-//! timer; for every contact its bodies, normal, and per point the feature id and the
-//! accumulated normal and friction impulses. Free slots never count.
+//! timer; for every contact its bodies, normal, per point the feature id and the
+//! accumulated normal impulse, and the patch's friction and twist impulses. Free slots
+//! never count.
 
 use super::body::{Body, BodyKind, MassSpec, Material};
 use super::contact::{Contact, ContactPoint};
@@ -524,8 +525,6 @@ fn put_point(s: &mut impl Sink, p: &ContactPoint) {
     s.vec3(p.local_b);
     s.f32(p.separation);
     s.f32(p.normal_impulse);
-    s.vec3(p.tangent_impulse);
-    s.u8(p.sticking as u8);
 }
 
 /// A contact point read back: finite, anchors within [`MAX_STATE_MAGNITUDE`], a
@@ -538,8 +537,6 @@ fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
         local_b: r.vec3()?,
         separation: r.f32()?,
         normal_impulse: r.f32()?,
-        tangent_impulse: r.vec3()?,
-        sticking: r.bool()?,
         ..ContactPoint::default()
     };
     let small = |v: Vec3| v.abs().max_elem() <= MAX_STATE_MAGNITUDE;
@@ -568,6 +565,9 @@ fn put_contact(s: &mut impl Sink, c: &Contact) {
     s.u8(c.touching as u8);
     s.iso(&c.built_pose);
     s.f32(c.built_margin);
+    s.vec3(c.friction_impulse);
+    s.f32(c.twist_impulse);
+    s.u8(c.sticking as u8);
 }
 
 /// A unit vector, or zero (a contact that never had points).
@@ -592,8 +592,13 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
     let touching = r.bool()?;
     let built_pose = r.iso()?;
     let built_margin = r.f32()?;
+    let friction_impulse = r.vec3()?;
+    let twist_impulse = r.f32()?;
+    let sticking = r.bool()?;
     if built_pose.position.abs().max_elem() > MAX_STATE_MAGNITUDE
         || built_margin > MAX_STATE_MAGNITUDE
+        || twist_impulse.abs() > MAX_STATE_FORCE
+        || friction_impulse.abs().max_elem() > MAX_STATE_FORCE
     {
         return Err(SnapshotError::Corrupt);
     }
@@ -614,6 +619,9 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
             built_margin
         },
         hit_due: false,
+        friction_impulse,
+        twist_impulse,
+        sticking,
     })
 }
 
@@ -638,8 +646,9 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             for p in c.points.iter().take(c.len as usize) {
                 f.u64(p.id);
                 f.f32(p.normal_impulse);
-                f.vec3(p.tangent_impulse);
             }
+            f.vec3(c.friction_impulse);
+            f.f32(c.twist_impulse);
         }
         f.0
     }

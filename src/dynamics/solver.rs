@@ -155,9 +155,20 @@ pub(crate) fn solve<const N: usize, const C: usize>(
             if contact_solver::has_rigid_partner(c, bodies) != rigid_partner {
                 continue;
             }
-            if let Some(k) = contact_solver::prepare(c, i as u32, bodies, solver, cfg) {
-                // Cannot fail: one constraint per contact at most.
-                let _ = solver.constraints.push(k);
+            // Built in place: a constraint is about a kilobyte.
+            if solver
+                .constraints
+                .push(ContactConstraint::default())
+                .is_err()
+            {
+                continue;
+            }
+            let at = solver.constraints.len() - 1;
+            let mut k = core::mem::take(&mut solver.constraints[at]);
+            if contact_solver::prepare(c, i as u32, bodies, solver, cfg, &mut k) {
+                solver.constraints[at] = k;
+            } else {
+                solver.constraints.pop();
             }
         }
     }
