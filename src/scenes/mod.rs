@@ -1,23 +1,33 @@
-//! The standard scenes of `SCENES.md`, defined once and shared by tests, benchmarks and
-//! demos. Units are SI, gravity −Y, dt 1/60. "Jitter" comes from [`SplitMix64`] with a
-//! fixed seed, so every target builds the same scene.
+//! The standard scenes of `SCENES.md`, defined once and shared by tests, benchmarks,
+//! demos and the side-by-side comparison with other engines. Units are SI, gravity −Y,
+//! dt 1/60. "Jitter" comes from [`SplitMix64`] with a fixed seed, so every target builds
+//! the same scene.
+//!
+//! Every scene is first an engine-neutral list of bodies ([`SceneBody`]), produced one at
+//! a time by [`Scene::for_each_body`] without allocating; carom's [`Scene::build`] adds
+//! that list to a [`World`], and another engine's builder can add the same list to its own
+//! world.
 //!
 //! - [`Scene`]: the world scenes; [`Scene::REFERENCE`] are the ones whose checksums are
 //!   golden, run by [`Scene::run`] in a [`ReferenceWorld`].
+//! - [`SceneBody`], [`SceneShape`], [`SceneKind`]: the neutral description of one body.
 //! - [`narrow`]: the cross-target narrow-phase workload (the golden `narrow` line).
 //! - [`queries`]: the query sets of the narrow-phase benchmarks.
 //! - [`GoldenLine`]: one line of `tests/golden/checksums.txt`, as every target prints it.
 
-use crate::dynamics::body::{BodyDesc, Material};
+use crate::dynamics::body::Material;
 use crate::dynamics::BodyHandle;
-use crate::error::Error;
+use crate::error::{Error, Input};
 use crate::math::Vec3;
 use crate::rng::SplitMix64;
-use crate::shape::{ConvexHull, Shape};
+use crate::shape::ConvexHull;
 use crate::World;
 
 pub mod narrow;
+mod neutral;
 pub mod queries;
+
+pub use neutral::{SceneBody, SceneKind, SceneShape};
 
 /// The world type the reference scenes run in on every target (capacities are part of
 /// what a golden checksum means: drop rules depend on them).
@@ -55,11 +65,14 @@ pub enum Scene {
     /// Reference scene: a tower of 10 boxes that comes to rest and sleeps, 1000 steps
     /// (determinism).
     Tower,
+    /// Jolt Physics' `PerformanceTest` pyramid (`PerformanceTest/PyramidScene.h`): 1240
+    /// boxes of 2 m in 15 square layers, 500 steps. See [`jolt_pyramid`].
+    JoltPyramid,
 }
 
 impl Scene {
-    /// Every scene, in the order of SCENES.md.
-    pub const ALL: [Scene; 9] = [
+    /// Every scene, in the order of SCENES.md, then `jolt_pyramid`.
+    pub const ALL: [Scene; 10] = [
         Scene::Pyramid20,
         Scene::Pyramid100,
         Scene::Boxes,
@@ -69,6 +82,7 @@ impl Scene {
         Scene::Mixed,
         Scene::Bullets,
         Scene::Tower,
+        Scene::JoltPyramid,
     ];
 
     /// The reference scenes whose checksums after their steps are kept in
@@ -87,13 +101,19 @@ impl Scene {
             Scene::Mixed => "mixed",
             Scene::Bullets => "bullets",
             Scene::Tower => "tower",
+            Scene::JoltPyramid => "jolt_pyramid",
         }
+    }
+
+    /// The scene called `name` ([`Scene::name`]), if any.
+    pub fn from_name(name: &str) -> Option<Scene> {
+        Scene::ALL.into_iter().find(|s| s.name() == name)
     }
 
     /// Steps the scene is run for.
     pub fn steps(self) -> u32 {
         match self {
-            Scene::Pyramid20 => 500,
+            Scene::Pyramid20 | Scene::JoltPyramid => 500,
             Scene::Pyramid100 => 200,
             Scene::Boxes | Scene::Spheres | Scene::Hulls => 300,
             Scene::Bullet => 60,
@@ -113,28 +133,62 @@ impl Scene {
             Scene::Mixed => MIXED_WALLS + MIXED_BODIES,
             Scene::Bullets => 6 + BULLETS,
             Scene::Tower => 11,
+            Scene::JoltPyramid => 1 + JOLT_PYRAMID_BOXES,
         }
     }
 
-    /// Add the scene's bodies to `world`. `hulls` are the shapes of the hull-using scenes
-    /// (see [`make_hulls`]; at least one is needed for `Hulls` and `Mixed`). Returns the
-    /// body to watch (the top box, the bullet, the first dynamic body).
+    /// Position in [`Scene::for_each_body`]'s order of the body to watch: the top box of
+    /// the pyramids and the tower, the bullet, otherwise the first dynamic body.
+    pub fn watched(self) -> usize {
+        match self {
+            Scene::Pyramid20 => pyramid_top(20),
+            Scene::Pyramid100 => pyramid_top(100),
+            Scene::Boxes | Scene::Hulls | Scene::Bullet => 1,
+            Scene::Spheres | Scene::Mixed => 5,
+            Scene::Bullets => 6,
+            Scene::Tower => 10,
+            Scene::JoltPyramid => JOLT_PYRAMID_BOXES,
+        }
+    }
+
+    /// Call `f` with each of the scene's [`Scene::body_count`] bodies in order (static
+    /// ground and walls first), the engine-neutral definition every builder shares.
+    /// `hulls_len` is the number of hulls the caller has (see [`make_hulls`]): hull bodies
+    /// cycle through indices below it, and `Hulls` and `Mixed` need at least one (else
+    /// `Error::OutOfRange(Input::Config)`, converted into `E`). Stops at the first error
+    /// `f` returns.
+    pub fn for_each_body<E, F>(self, hulls_len: usize, mut f: F) -> Result<(), E>
+    where
+        E: From<Error>,
+        F: FnMut(&SceneBody) -> Result<(), E>,
+    {
+        let f: &mut dyn FnMut(&SceneBody) -> Result<(), E> = &mut f;
+        match self {
+            Scene::Pyramid20 => pyramid_bodies(20, f),
+            Scene::Pyramid100 => pyramid_bodies(100, f),
+            Scene::Boxes => boxes_bodies(f),
+            Scene::Spheres => spheres_bodies(f),
+            Scene::Hulls => hull_pile_bodies(hulls_len, f),
+            Scene::Bullet => bullet_bodies(f),
+            Scene::Mixed => mixed_bodies(hulls_len, f),
+            Scene::Bullets => bullets_bodies(f),
+            Scene::Tower => tower_bodies(10, f),
+            Scene::JoltPyramid => jolt_pyramid_bodies(f),
+        }
+    }
+
+    /// Add the scene's bodies ([`Scene::for_each_body`]) to `world`. `hulls` are the
+    /// shapes of the hull-using scenes (see [`make_hulls`]; at least one is needed for
+    /// `Hulls` and `Mixed`). Returns the body to watch ([`Scene::watched`]: the top box,
+    /// the bullet, the first dynamic body).
     pub fn build<'a, const B: usize, const C: usize, const E: usize>(
         self,
         world: &mut World<'a, B, C, E>,
         hulls: &'a [ConvexHull],
     ) -> Result<BodyHandle, Error> {
-        match self {
-            Scene::Pyramid20 => pyramid(world, 20),
-            Scene::Pyramid100 => pyramid(world, 100),
-            Scene::Boxes => boxes(world),
-            Scene::Spheres => spheres(world),
-            Scene::Hulls => hull_pile(world, hulls),
-            Scene::Bullet => bullet(world),
-            Scene::Mixed => mixed(world, hulls),
-            Scene::Bullets => bullets(world),
-            Scene::Tower => tower(world, 10),
-        }
+        add_bodies(world, hulls, self.watched(), |f| {
+            self.for_each_body(hulls.len(), f)
+        })
     }
 
     /// The configuration the scene runs with: the default (sleep on, as behaviour tests
@@ -204,33 +258,75 @@ pub fn make_hulls(out: &mut [ConvexHull], seed: u64) -> Result<usize, Error> {
     Ok(out.len())
 }
 
-fn ground<'a, const B: usize, const C: usize, const E: usize>(
+/// The callback every body generator below feeds.
+type Sink<'f, E> = &'f mut dyn FnMut(&SceneBody) -> Result<(), E>;
+
+/// Add the bodies `each` produces to `world`, in order, and return the handle of the one
+/// at position `watch` (`Error::OutOfRange(Input::Config)` when there are fewer).
+fn add_bodies<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
-    half: Vec3,
+    hulls: &'a [ConvexHull],
+    watch: usize,
+    each: impl FnOnce(Sink<'_, Error>) -> Result<(), Error>,
 ) -> Result<BodyHandle, Error> {
-    // Top face at y = 0.
-    world.add(BodyDesc::fixed(Shape::cuboid(half)?).position(Vec3::new(0.0, -half.y, 0.0)))
+    let mut n = 0usize;
+    let mut watched = None;
+    each(&mut |body: &SceneBody| {
+        let h = world.add(body.desc(hulls)?)?;
+        if n == watch {
+            watched = Some(h);
+        }
+        n += 1;
+        Ok(())
+    })?;
+    watched.ok_or(Error::OutOfRange(Input::Config))
 }
 
-/// `pyramid20` / `pyramid100`: a wall pyramid in the XY plane. Box (i, j), row `i`,
-/// `i <= j < base`, at x = (i+1)·h + 2(j−i)·h − h·base, y = (2i+1)·h, h = 0.5.
-/// Returns the top box.
-pub fn pyramid<'a, const B: usize, const C: usize, const E: usize>(
-    world: &mut World<'a, B, C, E>,
-    base: u32,
-) -> Result<BodyHandle, Error> {
+/// A cuboid shape.
+const fn cuboid(x: f32, y: f32, z: f32) -> SceneShape {
+    SceneShape::Cuboid {
+        half_extents: Vec3::new(x, y, z),
+    }
+}
+
+/// A static ground box of half-extents `half`, top face at y = 0.
+fn ground(half: Vec3) -> SceneBody {
+    SceneBody::fixed(SceneShape::Cuboid { half_extents: half }).at(Vec3::new(0.0, -half.y, 0.0))
+}
+
+/// Position of a wall pyramid's top box in its body order (the last one).
+const fn pyramid_top(base: usize) -> usize {
+    base * (base + 1) / 2
+}
+
+fn pyramid_bodies<E>(base: u32, f: Sink<'_, E>) -> Result<(), E> {
     let h = 0.5f32;
-    ground(world, Vec3::new(100.0, 1.0, 100.0))?;
-    let cube = Shape::cuboid(Vec3::splat(h))?;
-    let mut top = None;
+    f(&ground(Vec3::new(100.0, 1.0, 100.0)))?;
+    let cube = SceneBody::dynamic(cuboid(h, h, h));
     for i in 0..base {
         for j in i..base {
             let x = (i + 1) as f32 * h + 2.0 * (j - i) as f32 * h - h * base as f32;
             let y = (2 * i + 1) as f32 * h;
-            top = Some(world.add(BodyDesc::dynamic(cube).position(Vec3::new(x, y, 0.0)))?);
+            f(&cube.at(Vec3::new(x, y, 0.0)))?;
         }
     }
-    top.ok_or(Error::OutOfRange(crate::Input::Config))
+    Ok(())
+}
+
+/// `pyramid20` / `pyramid100`: a wall pyramid in the XY plane. Box (i, j), row `i`,
+/// `i <= j < base`, at x = (i+1)·h + 2(j−i)·h − h·base, y = (2i+1)·h, h = 0.5, on a
+/// ground of half-extents (100, 1, 100) with its top at y = 0. Returns the top box.
+pub fn pyramid<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+    base: u32,
+) -> Result<BodyHandle, Error> {
+    let top = pyramid_top(base as usize);
+    add_bodies(world, &[], top, |f| pyramid_bodies(base, f))
+}
+
+fn boxes_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
+    f(&ground(Vec3::new(50.0, 0.5, 50.0)))?;
+    jittered_grid(SceneBody::dynamic(cuboid(0.5, 0.5, 0.5)), 10, f)
 }
 
 /// `boxes`: 1000 boxes (half 0.5) in a 10×10×10 grid, spacing 1.2, lowest layer at y = 2,
@@ -238,8 +334,22 @@ pub fn pyramid<'a, const B: usize, const C: usize, const E: usize>(
 pub fn boxes<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    ground(world, Vec3::new(50.0, 0.5, 50.0))?;
-    jittered_grid(world, Shape::cuboid(Vec3::splat(0.5))?, 10)
+    add_bodies(world, &[], Scene::Boxes.watched(), |f| boxes_bodies(f))
+}
+
+fn spheres_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
+    f(&ground(Vec3::new(11.0, 0.5, 11.0)))?;
+    let wall_x = SceneBody::fixed(cuboid(0.5, 15.0, 11.0));
+    let wall_z = SceneBody::fixed(cuboid(11.0, 15.0, 0.5));
+    for s in [-1.0f32, 1.0] {
+        f(&wall_x.at(Vec3::new(s * 10.5, 15.0, 0.0)))?;
+        f(&wall_z.at(Vec3::new(0.0, 15.0, s * 10.5)))?;
+    }
+    jittered_grid(
+        SceneBody::dynamic(SceneShape::Sphere { radius: 0.5 }),
+        16,
+        f,
+    )
 }
 
 /// `spheres`: 4096 spheres (r 0.5) in a 16×16×16 grid, x, z = (i − 7.5)·1.2, y = 2 + j·1.2,
@@ -248,26 +358,14 @@ pub fn boxes<'a, const B: usize, const C: usize, const E: usize>(
 pub fn spheres<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    ground(world, Vec3::new(11.0, 0.5, 11.0))?;
-    let wall_x = Shape::cuboid(Vec3::new(0.5, 15.0, 11.0))?;
-    let wall_z = Shape::cuboid(Vec3::new(11.0, 15.0, 0.5))?;
-    for s in [-1.0f32, 1.0] {
-        world.add(BodyDesc::fixed(wall_x).position(Vec3::new(s * 10.5, 15.0, 0.0)))?;
-        world.add(BodyDesc::fixed(wall_z).position(Vec3::new(0.0, 15.0, s * 10.5)))?;
-    }
-    jittered_grid(world, Shape::sphere(0.5)?, 16)
+    add_bodies(world, &[], Scene::Spheres.watched(), |f| spheres_bodies(f))
 }
 
-/// `n`×`n`×`n` dynamic copies of `shape`, spacing 1.2, centred on x = z = 0, lowest layer
-/// at y = 2, jitter ±0.1 in x and z (x fastest, then z, then y). Returns the first body.
-fn jittered_grid<'a, const B: usize, const C: usize, const E: usize>(
-    world: &mut World<'a, B, C, E>,
-    shape: Shape<'a>,
-    n: u32,
-) -> Result<BodyHandle, Error> {
+/// `n`×`n`×`n` copies of `body`, spacing 1.2, centred on x = z = 0, lowest layer at
+/// y = 2, jitter ±0.1 in x and z (x fastest, then z, then y).
+fn jittered_grid<E>(body: SceneBody, n: u32, f: Sink<'_, E>) -> Result<(), E> {
     let centre = (n as f32 - 1.0) * 0.5;
     let mut rng = SplitMix64::new(SEED);
-    let mut first = None;
     for y in 0..n {
         for z in 0..n {
             for x in 0..n {
@@ -276,12 +374,37 @@ fn jittered_grid<'a, const B: usize, const C: usize, const E: usize>(
                     2.0 + y as f32 * 1.2,
                     (z as f32 - centre) * 1.2 + rng.range(-0.1, 0.1),
                 );
-                let hnd = world.add(BodyDesc::dynamic(shape).position(p))?;
-                first.get_or_insert(hnd);
+                f(&body.at(p))?;
             }
         }
     }
-    first.ok_or(Error::OutOfRange(crate::Input::Config))
+    Ok(())
+}
+
+fn hull_pile_bodies<E: From<Error>>(hulls_len: usize, f: Sink<'_, E>) -> Result<(), E> {
+    if hulls_len == 0 {
+        return Err(Error::OutOfRange(Input::Config).into());
+    }
+    f(&ground(Vec3::new(50.0, 0.5, 50.0)))?;
+    let mut rng = SplitMix64::new(SEED);
+    let mut n = 0usize;
+    for y in 0..5 {
+        for z in 0..10 {
+            for x in 0..10 {
+                let hull = n % hulls_len;
+                n += 1;
+                let p = Vec3::new(
+                    (x as f32 - 4.5) * 2.5 + rng.range(-0.2, 0.2),
+                    2.0 + y as f32 * 2.5,
+                    (z as f32 - 4.5) * 2.5 + rng.range(-0.2, 0.2),
+                );
+                let mut body = SceneBody::dynamic(SceneShape::Hull(hull)).at(p);
+                body.rotation = rng.rotation();
+                f(&body)?;
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `hulls`: 500 hulls (cycling through `hulls`) in a 10×5×10 grid, spacing 2.5, lowest
@@ -290,33 +413,23 @@ pub fn hull_pile<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     hulls: &'a [ConvexHull],
 ) -> Result<BodyHandle, Error> {
-    if hulls.is_empty() {
-        return Err(Error::OutOfRange(crate::Input::Config));
-    }
-    ground(world, Vec3::new(50.0, 0.5, 50.0))?;
-    let mut rng = SplitMix64::new(SEED);
-    let mut first = None;
-    let mut n = 0usize;
-    for y in 0..5 {
-        for z in 0..10 {
-            for x in 0..10 {
-                let hull = &hulls[n % hulls.len()];
-                n += 1;
-                let p = Vec3::new(
-                    (x as f32 - 4.5) * 2.5 + rng.range(-0.2, 0.2),
-                    2.0 + y as f32 * 2.5,
-                    (z as f32 - 4.5) * 2.5 + rng.range(-0.2, 0.2),
-                );
-                let hnd = world.add(
-                    BodyDesc::dynamic(Shape::hull(hull))
-                        .position(p)
-                        .rotation(rng.rotation()),
-                )?;
-                first.get_or_insert(hnd);
-            }
-        }
-    }
-    first.ok_or(Error::OutOfRange(crate::Input::Config))
+    add_bodies(world, hulls, Scene::Hulls.watched(), |f| {
+        hull_pile_bodies(hulls.len(), f)
+    })
+}
+
+fn bullet_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
+    f(&SceneBody::fixed(cuboid(0.05, 5.0, 5.0)))?;
+    let mut ball = SceneBody::dynamic(SceneShape::Sphere { radius: 0.05 })
+        .at(Vec3::new(-5.0, 0.0, 0.0))
+        .with_material(Material {
+            restitution: 0.0,
+            static_friction: 0.0,
+            kinetic_friction: 0.0,
+            ..Material::DEFAULT
+        });
+    ball.velocity = Vec3::new(500.0, 0.0, 0.0);
+    f(&ball)
 }
 
 /// `bullet`: no gravity (the caller's config must set it: see [`bullet_config`]); a
@@ -325,18 +438,7 @@ pub fn hull_pile<'a, const B: usize, const C: usize, const E: usize>(
 pub fn bullet<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    world.add(BodyDesc::fixed(Shape::cuboid(Vec3::new(0.05, 5.0, 5.0))?))?;
-    world.add(
-        BodyDesc::dynamic(Shape::sphere(0.05)?)
-            .position(Vec3::new(-5.0, 0.0, 0.0))
-            .velocity(Vec3::new(500.0, 0.0, 0.0))
-            .material(Material {
-                restitution: 0.0,
-                static_friction: 0.0,
-                kinetic_friction: 0.0,
-                ..Material::DEFAULT
-            }),
-    )
+    add_bodies(world, &[], Scene::Bullet.watched(), |f| bullet_bodies(f))
 }
 
 /// The configuration of the `bullet` scene: the default with zero gravity.
@@ -352,33 +454,29 @@ pub const MIXED_WALLS: usize = 5;
 /// Dynamic bodies of the `mixed` scene.
 pub const MIXED_BODIES: usize = 120;
 
-/// `mixed`: 120 bodies (spheres, capsules, boxes and hulls in turn) of varied sizes,
-/// rotations, friction and restitution, dropped from a 6×5×4 jittered grid into a box of
-/// inner half-width 4 with walls 6 tall. Returns the first dynamic body.
-pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
-    world: &mut World<'a, B, C, E>,
-    hulls: &'a [ConvexHull],
-) -> Result<BodyHandle, Error> {
-    if hulls.is_empty() {
-        return Err(Error::OutOfRange(crate::Input::Config));
+fn mixed_bodies<E: From<Error>>(hulls_len: usize, f: Sink<'_, E>) -> Result<(), E> {
+    if hulls_len == 0 {
+        return Err(Error::OutOfRange(Input::Config).into());
     }
-    ground(world, Vec3::new(5.0, 0.5, 5.0))?;
-    let wall_x = Shape::cuboid(Vec3::new(0.5, 3.0, 5.0))?;
-    let wall_z = Shape::cuboid(Vec3::new(5.0, 3.0, 0.5))?;
+    f(&ground(Vec3::new(5.0, 0.5, 5.0)))?;
+    let wall_x = SceneBody::fixed(cuboid(0.5, 3.0, 5.0));
+    let wall_z = SceneBody::fixed(cuboid(5.0, 3.0, 0.5));
     for s in [-1.0f32, 1.0] {
-        world.add(BodyDesc::fixed(wall_x).position(Vec3::new(s * 4.5, 3.0, 0.0)))?;
-        world.add(BodyDesc::fixed(wall_z).position(Vec3::new(0.0, 3.0, s * 4.5)))?;
+        f(&wall_x.at(Vec3::new(s * 4.5, 3.0, 0.0)))?;
+        f(&wall_z.at(Vec3::new(0.0, 3.0, s * 4.5)))?;
     }
     let mut rng = SplitMix64::new(SEED ^ 0x5EED);
-    let mut first = None;
     for n in 0..MIXED_BODIES {
         let (x, y, z) = (n % 6, n / 24, (n / 6) % 4);
         let s = rng.range(0.6, 1.4);
         let shape = match n % 4 {
-            0 => Shape::sphere(0.3 * s)?,
-            1 => Shape::capsule(0.25 * s, 0.2 * s)?,
-            2 => Shape::cuboid(Vec3::new(0.3 * s, 0.2 * s, 0.25 * s))?,
-            _ => Shape::hull(&hulls[n % hulls.len()]),
+            0 => SceneShape::Sphere { radius: 0.3 * s },
+            1 => SceneShape::Capsule {
+                half_height: 0.25 * s,
+                radius: 0.2 * s,
+            },
+            2 => cuboid(0.3 * s, 0.2 * s, 0.25 * s),
+            _ => SceneShape::Hull(n % hulls_len),
         };
         let material = Material {
             restitution: rng.range(0.0, 0.6),
@@ -391,17 +489,26 @@ pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
             1.0 + y as f32 * 1.1,
             (z as f32 - 1.5) * 1.1 + rng.range(-0.1, 0.1),
         );
-        let hnd = world.add(
-            BodyDesc::dynamic(shape)
-                .position(p)
-                .rotation(rng.rotation())
-                .velocity(Vec3::new(rng.range(-2.0, 2.0), 0.0, rng.range(-2.0, 2.0)))
-                .material(material)
-                .density(if n % 4 == 3 { 200.0 } else { 1000.0 }),
-        )?;
-        first.get_or_insert(hnd);
+        let mut body = SceneBody::dynamic(shape).at(p).with_material(material);
+        // Draw order: rotation, then the two velocity components.
+        body.rotation = rng.rotation();
+        body.velocity = Vec3::new(rng.range(-2.0, 2.0), 0.0, rng.range(-2.0, 2.0));
+        body.density = if n % 4 == 3 { 200.0 } else { 1000.0 };
+        f(&body)?;
     }
-    first.ok_or(Error::OutOfRange(crate::Input::Config))
+    Ok(())
+}
+
+/// `mixed`: 120 bodies (spheres, capsules, boxes and hulls in turn) of varied sizes,
+/// rotations, friction and restitution, dropped from a 6×5×4 jittered grid into a box of
+/// inner half-width 4 with walls 6 tall. Returns the first dynamic body.
+pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+    hulls: &'a [ConvexHull],
+) -> Result<BodyHandle, Error> {
+    add_bodies(world, hulls, Scene::Mixed.watched(), |f| {
+        mixed_bodies(hulls.len(), f)
+    })
 }
 
 /// The step at which the cross-target snapshot of the `mixed` scene is taken
@@ -427,24 +534,23 @@ pub fn continue_from_snapshot<'a, const B: usize, const C: usize, const E: usize
 /// Bullets fired in the `bullets` scene.
 pub const BULLETS: usize = 12;
 
-/// `bullets`: a closed room (floor, ceiling and four walls 0.1 m thick, inner half-width
-/// 3 m) and [`BULLETS`] spheres of radius 0.05 fired from the centre at 150 to 400 m/s in
-/// seeded directions, the last two straight at each other. Returns the first bullet.
-pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
-    world: &mut World<'a, B, C, E>,
-) -> Result<BodyHandle, Error> {
+fn bullets_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
     let t = 0.05; // half thickness
-    let slab_y = Shape::cuboid(Vec3::new(3.0 + 2.0 * t, t, 3.0 + 2.0 * t))?;
-    let slab_x = Shape::cuboid(Vec3::new(t, 3.0, 3.0))?;
-    let slab_z = Shape::cuboid(Vec3::new(3.0, 3.0, t))?;
+    let slab_y = SceneBody::fixed(cuboid(3.0 + 2.0 * t, t, 3.0 + 2.0 * t));
+    let slab_x = SceneBody::fixed(cuboid(t, 3.0, 3.0));
+    let slab_z = SceneBody::fixed(cuboid(3.0, 3.0, t));
     for s in [-1.0f32, 1.0] {
-        world.add(BodyDesc::fixed(slab_y).position(Vec3::new(0.0, 3.0 + s * (3.0 + t), 0.0)))?;
-        world.add(BodyDesc::fixed(slab_x).position(Vec3::new(s * (3.0 + t), 3.0, 0.0)))?;
-        world.add(BodyDesc::fixed(slab_z).position(Vec3::new(0.0, 3.0, s * (3.0 + t))))?;
+        f(&slab_y.at(Vec3::new(0.0, 3.0 + s * (3.0 + t), 0.0)))?;
+        f(&slab_x.at(Vec3::new(s * (3.0 + t), 3.0, 0.0)))?;
+        f(&slab_z.at(Vec3::new(0.0, 3.0, s * (3.0 + t))))?;
     }
-    let ball = Shape::sphere(0.05)?;
+    let ball = SceneBody::dynamic(SceneShape::Sphere { radius: 0.05 }).with_material(Material {
+        restitution: 0.5,
+        static_friction: 0.5,
+        kinetic_friction: 0.3,
+        ..Material::DEFAULT
+    });
     let mut rng = SplitMix64::new(SEED ^ 0xB011E7);
-    let mut first = None;
     for n in 0..BULLETS {
         let (p, v) = if n + 2 >= BULLETS {
             let s = if n + 2 == BULLETS { -1.0 } else { 1.0 };
@@ -463,17 +569,30 @@ pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
                 dir * rng.range(150.0, 400.0),
             )
         };
-        let hnd = world.add(BodyDesc::dynamic(ball).position(p).velocity(v).material(
-            Material {
-                restitution: 0.5,
-                static_friction: 0.5,
-                kinetic_friction: 0.3,
-                ..Material::DEFAULT
-            },
-        ))?;
-        first.get_or_insert(hnd);
+        let mut body = ball.at(p);
+        body.velocity = v;
+        f(&body)?;
     }
-    first.ok_or(Error::OutOfRange(crate::Input::Config))
+    Ok(())
+}
+
+/// `bullets`: a closed room (floor, ceiling and four walls 0.1 m thick, inner half-width
+/// 3 m) and [`BULLETS`] spheres of radius 0.05 fired from the centre at 150 to 400 m/s in
+/// seeded directions, the last two straight at each other. Returns the first bullet.
+pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+) -> Result<BodyHandle, Error> {
+    add_bodies(world, &[], Scene::Bullets.watched(), |f| bullets_bodies(f))
+}
+
+fn tower_bodies<E>(height: u32, f: Sink<'_, E>) -> Result<(), E> {
+    f(&ground(Vec3::new(10.0, 0.5, 10.0)))?;
+    let cube = SceneBody::dynamic(cuboid(0.5, 0.5, 0.5));
+    for i in 0..height {
+        let y = 0.5 + i as f32 * 1.01;
+        f(&cube.at(Vec3::new(0.0, y, 0.0)))?;
+    }
+    Ok(())
 }
 
 /// `tower`: `height` boxes of half-extent 0.5 stacked on a ground box (top at y = 0),
@@ -482,12 +601,153 @@ pub fn tower<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     height: u32,
 ) -> Result<BodyHandle, Error> {
-    ground(world, Vec3::new(10.0, 0.5, 10.0))?;
-    let cube = Shape::cuboid(Vec3::splat(0.5))?;
-    let mut top = None;
-    for i in 0..height {
-        let y = 0.5 + i as f32 * 1.01;
-        top = Some(world.add(BodyDesc::dynamic(cube).position(Vec3::new(0.0, y, 0.0)))?);
+    add_bodies(world, &[], height as usize, |f| tower_bodies(height, f))
+}
+
+/// Layers of the `jolt_pyramid` scene.
+pub const JOLT_PYRAMID_LAYERS: u32 = 15;
+/// Boxes of the `jolt_pyramid` scene: 15² + 14² + … + 1² = 1240.
+pub const JOLT_PYRAMID_BOXES: usize = 1240;
+/// Height (m) each `jolt_pyramid` box falls before it lands on the layer below: layers
+/// start 2.5 m apart and the boxes are 2 m tall.
+pub const JOLT_PYRAMID_GAP: f32 = 0.5;
+/// Jolt's default friction (`BodyCreationSettings::mFriction`), on every body of
+/// `jolt_pyramid` (static and kinetic alike).
+pub const JOLT_FRICTION: f32 = 0.2;
+/// Jolt's default linear and angular damping (1/s, `BodyCreationSettings`), on every
+/// dynamic body of `jolt_pyramid`.
+pub const JOLT_DAMPING: f32 = 0.05;
+
+fn jolt_pyramid_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
+    let jolt = Material {
+        restitution: 0.0,
+        static_friction: JOLT_FRICTION,
+        kinetic_friction: JOLT_FRICTION,
+        ..Material::DEFAULT
+    };
+    f(&ground(Vec3::new(50.0, 1.0, 50.0)).with_material(jolt))?;
+    let size = 2.0f32;
+    let half = 0.5 * size;
+    let n = JOLT_PYRAMID_LAYERS as i32;
+    let mut cube = SceneBody::dynamic(cuboid(half, half, half)).with_material(jolt);
+    cube.linear_damping = JOLT_DAMPING;
+    cube.angular_damping = JOLT_DAMPING;
+    for i in 0..n {
+        let offset = if i % 2 == 1 { half } else { 0.0 };
+        let y = 1.0 + (size + JOLT_PYRAMID_GAP) * i as f32;
+        for j in i / 2..n - (i + 1) / 2 {
+            for k in i / 2..n - (i + 1) / 2 {
+                let x = -(n as f32) + size * j as f32 + offset;
+                let z = -(n as f32) + size * k as f32 + offset;
+                f(&cube.at(Vec3::new(x, y, z)))?;
+            }
+        }
     }
-    top.ok_or(Error::OutOfRange(crate::Input::Config))
+    Ok(())
+}
+
+/// `jolt_pyramid`: the pyramid of Jolt Physics' `PerformanceTest` (its
+/// `PerformanceTest/PyramidScene.h`, scene "Pyramid"), the same bodies in the same order.
+///
+/// What Jolt's scene does, as read from its source:
+/// - ground: a static box of half-extents (50, 1, 50) at (0, −1, 0), top face at y = 0;
+/// - boxes: cubes of size 2 m (half-extent 1, convex radius 0 in Jolt), in
+///   [`JOLT_PYRAMID_LAYERS`] = 15 layers; layer `i` (0 at the bottom) holds
+///   (15 − i) × (15 − i) boxes, j and k from ⌊i/2⌋ to 15 − ⌈i/2⌉ − 1, at
+///   x = −15 + 2j + o, y = 1 + 2.5 i, z = −15 + 2k + o, with o = 1 on odd layers (each
+///   box straddles four below) and 0 on even ones: 1240 boxes (j outer, k inner);
+/// - boxes in a layer touch side by side; layers start [`JOLT_PYRAMID_GAP`] = 0.5 m
+///   apart, so every layer falls 0.5 m onto the one below and the top box comes to rest
+///   about 14 × 0.5 = 7 m below its start;
+/// - material: Jolt's defaults, friction [`JOLT_FRICTION`] = 0.2 (geometric mean, as
+///   carom combines), restitution 0, density 1000 kg/m³, linear and angular damping
+///   [`JOLT_DAMPING`] = 0.05 1/s;
+/// - Jolt's performance test steps it 500 times (its default `-i`) at dt 1/60 with one
+///   collision step per update, with sleeping disallowed on every box.
+///
+/// Returns the top box.
+pub fn jolt_pyramid<'a, const B: usize, const C: usize, const E: usize>(
+    world: &mut World<'a, B, C, E>,
+) -> Result<BodyHandle, Error> {
+    add_bodies(world, &[], Scene::JoltPyramid.watched(), |f| {
+        jolt_pyramid_bodies(f)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_scene_lists_its_body_count_and_watches_a_dynamic_body() {
+        for scene in Scene::ALL {
+            let mut n = 0usize;
+            let mut watched = None;
+            let r: Result<(), Error> = scene.for_each_body(3, |b| {
+                if n == scene.watched() {
+                    watched = Some(*b);
+                }
+                n += 1;
+                Ok(())
+            });
+            assert_eq!(r, Ok(()), "{scene:?}");
+            assert_eq!(n, scene.body_count(), "{scene:?}");
+            assert_eq!(
+                watched.map(|b| b.kind),
+                Some(SceneKind::Dynamic),
+                "{scene:?}"
+            );
+            assert_eq!(Scene::from_name(scene.name()), Some(scene));
+        }
+        assert_eq!(Scene::from_name("nope"), None);
+    }
+
+    #[test]
+    fn hull_scenes_need_a_hull_and_stay_below_the_count_given() {
+        for scene in [Scene::Hulls, Scene::Mixed] {
+            let r: Result<(), Error> = scene.for_each_body(0, |_| Ok(()));
+            assert_eq!(r, Err(Error::OutOfRange(Input::Config)));
+            let r: Result<(), Error> = scene.for_each_body(3, |b| match b.shape {
+                SceneShape::Hull(i) if i >= 3 => Err(Error::OutOfRange(Input::Point)),
+                _ => Ok(()),
+            });
+            assert_eq!(r, Ok(()));
+        }
+    }
+
+    #[test]
+    fn the_jolt_pyramid_has_jolts_layers_and_top() {
+        let mut per_layer = [0usize; JOLT_PYRAMID_LAYERS as usize];
+        let mut last = None;
+        let r: Result<(), Error> = Scene::JoltPyramid.for_each_body(0, |b| {
+            if b.kind == SceneKind::Dynamic {
+                let layer = ((b.position.y - 1.0) / 2.5) as usize;
+                if let Some(c) = per_layer.get_mut(layer) {
+                    *c += 1;
+                }
+                last = Some(b.position);
+            }
+            Ok(())
+        });
+        assert_eq!(r, Ok(()));
+        for (i, c) in per_layer.iter().enumerate() {
+            assert_eq!(*c, (15 - i) * (15 - i));
+        }
+        assert_eq!(last, Some(Vec3::new(-1.0, 36.0, -1.0)));
+    }
+
+    #[test]
+    fn a_stopping_callback_stops_the_list() {
+        let mut n = 0;
+        let r = Scene::Spheres.for_each_body(0, |_| {
+            n += 1;
+            if n == 3 {
+                Err(Error::OutOfRange(Input::Radius))
+            } else {
+                Ok(())
+            }
+        });
+        assert_eq!(r, Err(Error::OutOfRange(Input::Radius)));
+        assert_eq!(n, 3);
+    }
 }
