@@ -119,7 +119,7 @@
 use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::pool::Pool;
-use super::solver::{is_active, is_moving_kinematic, Solver, SolverBody, NONE};
+use super::solver::{is_active, is_moving_kinematic, SolverBody, NONE};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Vec3};
 
@@ -340,11 +340,12 @@ fn inverse_or_zero(k: f32) -> f32 {
 
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
 /// sensor, no point, or no moving dynamic body.
-pub(crate) fn prepare<const N: usize, const C: usize>(
+pub(crate) fn prepare<const N: usize>(
     c: &Contact,
     index: u32,
     bodies: &Pool<Body<'_>, N>,
-    solver: &Solver<N, C>,
+    solver_bodies: &[SolverBody],
+    solver_index: &[u32; N],
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
@@ -354,10 +355,10 @@ pub(crate) fn prepare<const N: usize, const C: usize>(
     let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
         return false;
     };
-    let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
-    let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
-    let sa = solver.bodies.get(ia as usize);
-    let sb = solver.bodies.get(ib as usize);
+    let ia = solver_index.get(c.a as usize).copied().unwrap_or(NONE);
+    let ib = solver_index.get(c.b as usize).copied().unwrap_or(NONE);
+    let sa = solver_bodies.get(ia as usize);
+    let sb = solver_bodies.get(ib as usize);
     let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
     let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
     if m_a <= 0.0 && m_b <= 0.0 {

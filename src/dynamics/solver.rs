@@ -152,23 +152,21 @@ pub(crate) fn solve<const N: usize, const C: usize>(
     // win over a ball knocked into it (Box2D v3 orders its colours the same way).
     for rigid_partner in [false, true] {
         for (i, c) in contacts.iter().enumerate() {
-            if contact_solver::has_rigid_partner(c, bodies) != rigid_partner {
-                continue;
-            }
-            // Built in place: a constraint is about a kilobyte.
-            if solver
-                .constraints
-                .push(ContactConstraint::default())
-                .is_err()
+            if c.len == 0 || c.sensor || contact_solver::has_rigid_partner(c, bodies) != rigid_partner
             {
                 continue;
             }
-            let at = solver.constraints.len() - 1;
-            let mut k = core::mem::take(&mut solver.constraints[at]);
-            if contact_solver::prepare(c, i as u32, bodies, solver, cfg, &mut k) {
-                solver.constraints[at] = k;
-            } else {
-                solver.constraints.pop();
+            let (sbodies, sindex, constraints) =
+                (&solver.bodies, &solver.index, &mut solver.constraints);
+            // Built in place: a constraint is about a kilobyte.
+            if constraints.push(ContactConstraint::default()).is_err() {
+                continue;
+            }
+            let Some(k) = constraints.last_mut() else {
+                continue;
+            };
+            if !contact_solver::prepare(c, i as u32, bodies, sbodies, sindex, cfg, k) {
+                constraints.pop();
             }
         }
     }
