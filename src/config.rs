@@ -35,22 +35,20 @@ pub struct WorldConfig {
     pub dt: f32,
     /// Sub-steps per step, each of `dt / substeps`. Default 4 (Box2D v3's); 1 to 64.
     pub substeps: u32,
-    /// Soft (biased) contact iterations per sub-step. Default 2; 1 to 64. (Box2D v3 runs
-    /// one at 30 Hz; carom's stiffer 60 Hz contacts need two to stay calm: measured on
-    /// `pyramid100`, whose wall is one box thick and buckles out of plane when its
-    /// contacts are soft.)
+    /// Soft (biased) contact iterations per sub-step. Default 1 (Box2D v3's); 1 to 64.
     pub velocity_iterations: u32,
     /// Relax iterations per sub-step: the normal rows without push-out (removing the
     /// velocity the push-out added), friction, rolling and twist. Default 1; 1 to 64.
     pub relax_iterations: u32,
     /// Contact stiffness (Hz) of dynamic–dynamic contacts; contacts with a static or
     /// kinematic body use twice this. Capped at a quarter of the sub-step rate inside the
-    /// step. Default 60 Hz, that cap at 4 sub-steps of 1/60 s (Box2D v3 uses 30 Hz: a
-    /// soft contact sags by `load / (m ω²)`, and at 30 Hz a tower of 20 unit boxes sags
-    /// 10 cm and buckles; at 60 Hz it sags 2.5 cm and stands); 0.1 to 1000.
+    /// step. Default 45 Hz (Box2D v3 uses 30 Hz: a soft contact sags by `load / (m ω²)`,
+    /// and at 30 Hz a tower of 20 unit boxes sags 10 cm and buckles; at 45 Hz it sags
+    /// 5 cm and stands, and `pyramid100` sinks 0.3 m instead of 0.67 m; 60 Hz, the cap at
+    /// 4 sub-steps, rings unless a second soft iteration is paid for); 0.1 to 1000.
     pub contact_hertz: f32,
-    /// Contact damping ratio (dimensionless). Default 10 (heavily over-damped: no
-    /// bounce from the spring); 0 to 1000.
+    /// Contact damping ratio (dimensionless). Default 5 (over-damped: no bounce from the
+    /// spring; rapier's 5, Box2D v3's 10); 0 to 1000.
     pub contact_damping_ratio: f32,
     /// Largest speed (m/s) at which the soft contact pushes overlapping bodies apart.
     /// Default 3 m/s (Box2D v3's `contactPushMaxVelocity`); 0 to 100.
@@ -111,10 +109,10 @@ impl WorldConfig {
         gravity: Vec3::new(0.0, -9.81, 0.0),
         dt: 1.0 / 60.0,
         substeps: 4,
-        velocity_iterations: 2,
+        velocity_iterations: 1,
         relax_iterations: 1,
-        contact_hertz: 60.0,
-        contact_damping_ratio: 10.0,
+        contact_hertz: 45.0,
+        contact_damping_ratio: 5.0,
         max_push_speed: 3.0,
         position_iterations: 1,
         restitution_threshold: 1.0,

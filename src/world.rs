@@ -119,14 +119,15 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         contact::update_contacts(&mut self.contacts, &self.bodies, &cfg, events, &mut report);
         self.trace(&mut trace, Stage::NarrowPhase);
         // 7 solve in sub-steps: integrate, warm start, soft contacts, relax, restitution
-        solver::solve(&mut self.solver, &mut self.contacts, &mut self.bodies, &cfg);
+        let (contacts, scratch) = (&mut self.contacts, &mut self.pairs);
+        solver::solve(&mut self.solver, contacts, &mut self.bodies, scratch, &cfg);
         self.trace(&mut trace, Stage::Solve);
         // 8 continuous collision: time of impact for fast bodies
         let (bodies, contacts, pairs) = (&mut self.bodies, &self.contacts, &mut self.pairs);
         ccd::sweep_fast_bodies(bodies, contacts, pairs, &cfg, cfg.dt, &mut report);
         self.trace(&mut trace, Stage::Continuous);
         // 9 projection: bounded push-out of the deep penetration that remains
-        projection::project(&mut self.solver, &mut self.bodies, &cfg);
+        projection::project(&mut self.solver, &self.contacts, &mut self.bodies, &cfg);
         self.trace(&mut trace, Stage::Projection);
         // 10 sleep: islands fall asleep and wake together
         report.awake_bodies =

@@ -655,183 +655,6 @@ impl Pair {
         self.vb += j * k.inv_mass_b;
         self.wb += k.it_b[0] * l[0] + k.it_b[1] * l[1];
     }
-
-    /// Apply an angular impulse `λ` about axis `i` (t₁, t₂, n).
-    #[inline]
-    fn push_angular(&mut self, k: &ContactConstraint, i: usize, lambda: f32) {
-        if let (Some(ia), Some(ib)) = (k.ia_axes.get(i), k.ib_axes.get(i)) {
-            self.wa -= *ia * lambda;
-            self.wb += *ib * lambda;
-        }
-    }
-}
-
-/// Apply the accumulated impulses of every constraint (start of each sub-step).
-pub(crate) fn warm_start(constraints: &[ContactConstraint], bodies: &mut [SolverBody]) {
-    for k in constraints {
-        let mut pair = Pair::load(k, bodies);
-        for p in k.points.iter().take(usize::from(k.len)) {
-            pair.push_normal(k, p, p.normal_impulse);
-        }
-        pair.push_tangent(k, k.tangent_impulse);
-        for (i, l) in k.angular_impulse.iter().enumerate() {
-            if *l != 0.0 {
-                pair.push_angular(k, i, *l);
-            }
-        }
-        pair.save(k, bodies);
-    }
-}
-
-/// The anchor of a point on a body now, relative to where its centre of mass started
-/// (module docs): `Δp + R l`, or the fixed lever arm for a body without a solver entry.
-#[inline]
-fn anchor_now(bodies: &[SolverBody], i: u32, local: Vec3, r0: Vec3) -> Vec3 {
-    match bodies.get(i as usize) {
-        Some(b) => b.dp + b.rot.mul_vec(local),
-        None => r0,
-    }
-}
-
-/// The separation of `p` at the bodies' current positions (m).
-#[inline]
-fn current_separation(k: &ContactConstraint, p: &ConstraintPoint, bodies: &[SolverBody]) -> f32 {
-    let d =
-        anchor_now(bodies, k.b, p.local_b, p.core_b) - anchor_now(bodies, k.a, p.local_a, p.core_a);
-    p.adjusted_separation + k.normal.dot(d)
-}
-
-/// One iteration over every constraint in order: normal rows (soft with `use_bias`,
-/// rigid without), the friction patch, rolling and twist (module docs). `last` marks the
-/// last relax iteration of the step, where stick/slip changes.
-pub(crate) fn solve(
-    constraints: &mut [ContactConstraint],
-    bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-    inv_h: f32,
-    use_bias: bool,
-    last: bool,
-) {
-    for k in constraints.iter_mut() {
-        solve_constraint(k, bodies, cfg, inv_h, use_bias, last);
-    }
-}
-
-fn solve_constraint(
-    k: &mut ContactConstraint,
-    bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-    inv_h: f32,
-    use_bias: bool,
-    last: bool,
-) {
-    let mut pair = Pair::load(k, bodies);
-    let n = k.normal;
-    let soft = k.softness;
-    let len = usize::from(k.len);
-    let mut total_normal = 0.0f32;
-    let mut twist_levers = 0.0f32;
-    // Normal rows.
-    for i in 0..len {
-        let Some(p) = k.points.get(i) else {
-            break;
-        };
-        let s = current_separation(k, p, bodies);
-        let (bias, mass_scale, impulse_scale) = if s > 0.0 {
-            (s * inv_h, 1.0, 0.0)
-        } else if use_bias {
-            let push = scalar::max(soft.mass_scale * soft.bias_rate * s, -cfg.max_push_speed);
-            (push, soft.mass_scale, soft.impulse_scale)
-        } else {
-            (0.0, 1.0, 0.0)
-        };
-        let vn = pair.normal_speed(n, p);
-        let lambda = -p.normal_mass * (mass_scale * vn + bias) - impulse_scale * p.normal_impulse;
-        let new = scalar::max(p.normal_impulse + lambda, 0.0);
-        let delta = new - p.normal_impulse;
-        pair.push_normal(k, p, delta);
-        total_normal += new;
-        twist_levers += new * p.twist_arm;
-        if let Some(q) = k.points.get_mut(i) {
-            q.normal_impulse = new;
-            q.total_impulse += delta;
-            q.separation = s;
-        }
-    }
-    solve_patch(k, &mut pair, cfg, total_normal, twist_levers, last);
-    solve_rolling(k, &mut pair, total_normal);
-    pair.save(k, bodies);
-}
-
-/// The friction patch: tangent rows in the Coulomb disc, twist, stick/slip (module docs).
-fn solve_patch(
-    k: &mut ContactConstraint,
-    pair: &mut Pair,
-    cfg: &WorldConfig,
-    total_normal: f32,
-    twist_levers: f32,
-    last: bool,
-) {
-    let [mu_s, mu_k] = k.friction;
-    let mu = if k.sticking { mu_s } else { mu_k };
-    let v = pair.tangent_speeds(k);
-    let [mxx, mxy, myy] = k.tangent_mass;
-    let old = k.tangent_impulse;
-    let wanted = [
-        old[0] - (mxx * v[0] + mxy * v[1]),
-        old[1] - (mxy * v[0] + myy * v[1]),
-    ];
-    let (mut new, clipped) = clip_to_disc(wanted, mu * total_normal);
-    pair.push_tangent(k, [new[0] - old[0], new[1] - old[1]]);
-    if last {
-        let after = pair.tangent_speeds(k);
-        let slip2 = after[0] * after[0] + after[1] * after[1];
-        let stick2 = cfg.stick_speed * cfg.stick_speed;
-        if k.sticking && k.established && clipped && slip2 >= stick2 {
-            // The static cone gave way: slide, at the kinetic cone from now on.
-            k.sticking = false;
-            let (kinetic, _) = clip_to_disc(new, mu_k * total_normal);
-            pair.push_tangent(k, [kinetic[0] - new[0], kinetic[1] - new[1]]);
-            new = kinetic;
-        } else if !k.sticking && slip2 < stick2 {
-            k.sticking = true;
-        }
-    }
-    k.tangent_impulse = new;
-    // Twist about the normal at the centre: the points' spread, or a single point's
-    // twist friction.
-    let mu = if k.sticking { mu_s } else { mu_k };
-    let limit = mu * twist_levers + k.twist * total_normal;
-    if limit > 0.0 {
-        let n = k.normal;
-        let old = k.angular_impulse[2];
-        let new = scalar::clamp(
-            old - k.axis_mass[2] * (pair.wb - pair.wa).dot(n),
-            -limit,
-            limit,
-        );
-        pair.push_angular(k, 2, new - old);
-        k.angular_impulse[2] = new;
-    }
-}
-
-/// Rolling resistance about the tangents (manifolds of one or two points).
-fn solve_rolling(k: &mut ContactConstraint, pair: &mut Pair, total_normal: f32) {
-    if k.rolling <= 0.0 {
-        return;
-    }
-    let [t1, t2] = k.tangents;
-    let dw = pair.wb - pair.wa;
-    let old = [k.angular_impulse[0], k.angular_impulse[1]];
-    let wanted = [
-        old[0] - k.axis_mass[0] * dw.dot(t1),
-        old[1] - k.axis_mass[1] * dw.dot(t2),
-    ];
-    let (new, _) = clip_to_disc(wanted, k.rolling * total_normal);
-    pair.push_angular(k, 0, new[0] - old[0]);
-    pair.push_angular(k, 1, new[1] - old[1]);
-    k.angular_impulse[0] = new[0];
-    k.angular_impulse[1] = new[1];
 }
 
 /// `v` shortened to length at most `radius` (a non-positive radius gives zero), and
@@ -850,32 +673,13 @@ fn clip_to_disc(v: [f32; 2], radius: f32) -> ([f32; 2], bool) {
     }
 }
 
-/// The collision pass (module docs): only points already within the speculative margin
-/// at the start of the step bounce here; points further out are stopped at the surface
-/// by their speculative rows and bounce in [`restitution`] after the sub-steps.
-pub(crate) fn bounce(
-    constraints: &mut [ContactConstraint],
-    bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-) {
-    if !constraints.iter().any(|k| k.restitution > 0.0) {
-        return;
-    }
-    for _ in 0..MAX_BOUNCE_PASSES {
-        let mut bounced = false;
-        for k in constraints.iter_mut() {
-            bounced |= bounce_constraint(k, bodies, cfg);
-        }
-        if !bounced {
-            break;
-        }
-    }
-}
-
-/// One constraint of one sweep of the collision pass: true when some point bounced.
-/// The transient impulse makes the colliding points separate at `e · approach`, with
-/// patch friction in the cone of that impulse.
-fn bounce_constraint(
+/// One constraint of one sweep of the collision pass (module docs): true when some
+/// point bounced. Only points already within the speculative margin at the start of the
+/// step bounce here; points further out are stopped at the surface by their speculative
+/// rows and bounce in [`restitution`] after the sub-steps. The transient impulse makes
+/// the colliding points separate at `e · approach`, with patch friction in the cone of
+/// that impulse.
+pub(crate) fn bounce_constraint(
     k: &mut ContactConstraint,
     bodies: &mut [SolverBody],
     cfg: &WorldConfig,
@@ -946,50 +750,24 @@ fn bounce_constraint(
     true
 }
 
-/// The restitution pass after the sub-steps (Box2D v3's `b2ApplyRestitution`), for the
-/// points the collision pass left alone: a point that closed faster than the threshold
-/// at prepare (`v_n0 < −threshold`) and pushed during the sub-steps (a speculative point
-/// far away at the start of the step, stopped at the surface by its row) gets
-/// `λ = −m_n (v_n + e v_n0)`, accumulated `≥ 0` in a pass of its own (not warm-started).
-pub(crate) fn restitution(
-    constraints: &[ContactConstraint],
-    bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-) {
-    for k in constraints.iter().filter(|k| k.restitution > 0.0) {
-        let mut pair = Pair::load(k, bodies);
-        let mut any = false;
-        for p in k.points.iter().take(usize::from(k.len)) {
-            if p.bounced || p.normal_speed0 > -cfg.restitution_threshold || p.total_impulse <= 0.0 {
-                continue;
-            }
-            let vn = pair.normal_speed(k.normal, p);
-            let lambda = scalar::max(-p.normal_mass * (vn + k.restitution * p.normal_speed0), 0.0);
-            pair.push_normal(k, p, lambda);
-            any = true;
-        }
-        if any {
-            pair.save(k, bodies);
-        }
-    }
-}
-
-/// Store the accumulated impulses and stick/slip state into the contacts.
-pub(crate) fn store(constraints: &[ContactConstraint], contacts: &mut [Contact]) {
-    for k in constraints {
-        let Some(c) = contacts.get_mut(k.contact as usize) else {
+/// The restitution pass after the sub-steps (Box2D v3's `b2ApplyRestitution`) for one
+/// constraint, for the points the collision pass left alone: a point that closed faster
+/// than the threshold at prepare (`v_n0 < −threshold`) and pushed during the sub-steps
+/// (a speculative point far away at the start of the step, stopped at the surface by its
+/// row) gets `λ = −m_n (v_n + e v_n0)`, `≥ 0`, in a pass of its own (not warm-started).
+pub(crate) fn restitution(k: &ContactConstraint, bodies: &mut [SolverBody], cfg: &WorldConfig) {
+    let mut pair = Pair::load(k, bodies);
+    let mut any = false;
+    for p in k.points.iter().take(usize::from(k.len)) {
+        if p.bounced || p.normal_speed0 > -cfg.restitution_threshold || p.total_impulse <= 0.0 {
             continue;
-        };
-        let [t1, t2] = k.tangents;
-        for (q, p) in c
-            .points
-            .iter_mut()
-            .zip(k.points.iter().take(usize::from(k.len)))
-        {
-            q.normal_impulse = p.normal_impulse;
         }
-        c.friction_impulse = t1 * k.tangent_impulse[0] + t2 * k.tangent_impulse[1];
-        c.twist_impulse = k.angular_impulse[2];
-        c.sticking = k.sticking;
+        let vn = pair.normal_speed(k.normal, p);
+        let lambda = scalar::max(-p.normal_mass * (vn + k.restitution * p.normal_speed0), 0.0);
+        pair.push_normal(k, p, lambda);
+        any = true;
+    }
+    if any {
+        pair.save(k, bodies);
     }
 }

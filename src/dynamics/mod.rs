@@ -12,5 +12,6 @@ pub mod query;
 pub(crate) mod sleep;
 pub mod snapshot;
 pub(crate) mod solver;
+pub(crate) mod wide;
 
 pub use pool::BodyHandle;

@@ -30,9 +30,10 @@
 //! `position_iterations` times (Gauss-Seidel). Only awake dynamic bodies move.
 
 use super::body::Body;
+use super::contact::Contact;
 use super::contact_solver::ContactConstraint;
 use super::pool::Pool;
-use super::solver::{effective_mass, Solver};
+use super::solver::{effective_mass, Solver, NONE};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3};
 
@@ -43,6 +44,7 @@ pub(crate) const DEEP_SLOPS: f32 = 4.0;
 /// Project the remaining deep penetration out of the solved contacts (module docs).
 pub(crate) fn project<const N: usize, const C: usize>(
     solver: &mut Solver<N, C>,
+    contacts: &[Contact],
     bodies: &mut Pool<Body<'_>, N>,
     cfg: &WorldConfig,
 ) {
@@ -54,12 +56,15 @@ pub(crate) fn project<const N: usize, const C: usize>(
         sb.projected = 0.0;
     }
     for _ in 0..cfg.position_iterations {
-        for i in 0..solver.constraints.len() {
-            let Some(k) = solver.constraints.get(i).copied() else {
-                break;
-            };
-            let len = usize::from(k.len);
-            if k.points.iter().take(len).any(|p| p.separation < deep) {
+        for g in 0..solver.store.groups as usize {
+            for l in 0..4 {
+                let Some(group) = solver.store.group(g) else {
+                    break;
+                };
+                if group.contact(l) == NONE || !group.deeper_than(l, deep) {
+                    continue;
+                }
+                let k = group.load_lane(l, contacts);
                 project_constraint(solver, bodies, &k, cfg);
             }
         }
@@ -82,9 +87,18 @@ fn project_constraint<const N: usize, const C: usize>(
         let (move_a, move_b) = (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0);
         let center_a = a.world_center();
         let center_b = b.world_center();
-        let r_a = a.pose.rotation.rotate(p.local_a);
-        let r_b = b.pose.rotation.rotate(p.local_b);
-        let separation = ((center_b + r_b) - (center_a + r_a)).dot(n);
+        // Core anchors in body axes; a body without a solver entry keeps a world lever.
+        let r_a = if k.a == NONE {
+            p.local_a
+        } else {
+            a.pose.rotation.rotate(p.local_a)
+        };
+        let r_b = if k.b == NONE {
+            p.local_b
+        } else {
+            b.pose.rotation.rotate(p.local_b)
+        };
+        let separation = ((center_b + r_b) - (center_a + r_a)).dot(n) - k.radius_sum;
         let correction = scalar::clamp(
             cfg.projection_factor * (separation + cfg.slop),
             -cfg.max_projection,

@@ -37,6 +37,7 @@ use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::contact_solver::{self, ContactConstraint};
 use super::pool::Pool;
+use super::wide::{self, WideStore};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Quat, Vec3};
 
@@ -72,6 +73,8 @@ pub(crate) struct SolverBody {
     pub projected: f32,
     /// The body's pool slot.
     pub slot: u32,
+    /// Bit `c` set: a contact of colour `c` moves this body (`wide.rs`).
+    pub colours: u32,
 }
 
 impl SolverBody {
@@ -89,6 +92,7 @@ impl SolverBody {
         angular_damping: 1.0,
         projected: 0.0,
         slot: NONE,
+        colours: 0,
     };
 }
 
@@ -100,8 +104,8 @@ pub(crate) struct Solver<const N: usize, const C: usize> {
     pub bodies: HVec<SolverBody, N>,
     /// Slot → index in `bodies`, or [`NONE`].
     pub index: [u32; N],
-    /// One constraint per manifold that pushes, in contact order.
-    pub constraints: HVec<ContactConstraint, C>,
+    /// The constraints, coloured and packed four to a group.
+    pub store: WideStore<C>,
 }
 
 impl<const N: usize, const C: usize> Solver<N, C> {
@@ -110,7 +114,7 @@ impl<const N: usize, const C: usize> Solver<N, C> {
         Solver {
             bodies: HVec::new(),
             index: [NONE; N],
-            constraints: HVec::new(),
+            store: WideStore::new(),
         }
     }
 
@@ -136,6 +140,7 @@ pub(crate) fn solve<const N: usize, const C: usize>(
     solver: &mut Solver<N, C>,
     contacts: &mut [Contact],
     bodies: &mut Pool<Body<'_>, N>,
+    scratch: &mut HVec<(u32, u32), C>,
     cfg: &WorldConfig,
 ) {
     let h = cfg.substep();
@@ -146,48 +151,207 @@ pub(crate) fn solve<const N: usize, const C: usize>(
         contact_solver::wake_touched_sleepers(c, bodies, cfg.dt);
     }
     gather(solver, bodies, cfg, h);
-    solver.constraints.clear();
-    // Contacts between two dynamic bodies first, then those against static and kinematic
-    // bodies: Gauss-Seidel gives the last word to what is solved last, and a wall must
-    // win over a ball knocked into it (Box2D v3 orders its colours the same way).
-    for rigid_partner in [false, true] {
-        for (i, c) in contacts.iter().enumerate() {
-            if c.len == 0 || c.sensor || contact_solver::has_rigid_partner(c, bodies) != rigid_partner
-            {
-                continue;
-            }
-            let (sbodies, sindex, constraints) =
-                (&solver.bodies, &solver.index, &mut solver.constraints);
-            // Built in place: a constraint is about a kilobyte.
-            if constraints.push(ContactConstraint::default()).is_err() {
-                continue;
-            }
-            let Some(k) = constraints.last_mut() else {
-                continue;
-            };
-            if !contact_solver::prepare(c, i as u32, bodies, sbodies, sindex, cfg, k) {
-                constraints.pop();
-            }
-        }
-    }
-    let (constraints, sbodies) = (&mut solver.constraints, &mut solver.bodies);
-    contact_solver::bounce(constraints, sbodies, cfg);
+    plan(solver, contacts, bodies, scratch, cfg);
+    let (store, sbodies) = (&mut solver.store, &mut solver.bodies);
+    bounce(store, sbodies, contacts, cfg);
     let inv_h = 1.0 / h;
     for sub in 0..cfg.substeps {
         integrate_velocities(sbodies, cfg);
-        contact_solver::warm_start(constraints, sbodies);
+        wide::warm_start(store, sbodies);
         for _ in 0..cfg.velocity_iterations {
-            contact_solver::solve(constraints, sbodies, cfg, inv_h, true, false);
+            wide::solve(store, sbodies, cfg, inv_h, true, false);
         }
         integrate_positions(sbodies, h);
         for k in 0..cfg.relax_iterations {
             let last = sub + 1 == cfg.substeps && k + 1 == cfg.relax_iterations;
-            contact_solver::solve(constraints, sbodies, cfg, inv_h, false, last);
+            wide::solve(store, sbodies, cfg, inv_h, false, last);
         }
     }
-    contact_solver::restitution(constraints, sbodies, cfg);
-    contact_solver::store(constraints, contacts);
+    restitution_and_store(store, sbodies, contacts, cfg);
     finalize(solver, bodies);
+}
+
+/// Colour the contacts that push (`wide.rs`), pack them four to a group in colour
+/// order, and prepare each into its lane. `scratch` holds `(colour, contact index)`.
+fn plan<const N: usize, const C: usize>(
+    solver: &mut Solver<N, C>,
+    contacts: &[Contact],
+    bodies: &Pool<Body<'_>, N>,
+    scratch: &mut HVec<(u32, u32), C>,
+    cfg: &WorldConfig,
+) {
+    scratch.clear();
+    // Visit order: contacts between two dynamic bodies first, then those against
+    // static, kinematic or sleeping bodies; within each, in the order of a fixed hash of
+    // the pair. Colouring in key order gives a regular pattern on regular scenes (all
+    // left supports of a pyramid row before all right ones), and Gauss-Seidel turns a
+    // regular order into a drift: a wall pyramid crept 10 cm sideways. The hash
+    // scrambles the order the same way on every target.
+    for (i, c) in contacts.iter().enumerate() {
+        if c.len == 0 || c.sensor {
+            continue;
+        }
+        let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
+        let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
+        let moves = |i: u32| {
+            solver
+                .bodies
+                .get(i as usize)
+                .is_some_and(|s| s.inv_mass > 0.0)
+        };
+        if !moves(ia) && !moves(ib) {
+            continue;
+        }
+        let class = u32::from(contact_solver::has_rigid_partner(c, bodies)) << 31;
+        let key = class | (pair_hash(c.key()) >> 1);
+        // Cannot fail: one entry per contact at most.
+        let _ = scratch.push((key, i as u32));
+    }
+    // Unique second components: an unstable sort is deterministic.
+    scratch.sort_unstable();
+    for (rank, entry) in scratch.iter_mut().enumerate() {
+        let Some(c) = contacts.get(entry.1 as usize) else {
+            continue;
+        };
+        let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
+        let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
+        let colour = wide::colour(&mut solver.bodies, ia, ib);
+        entry.0 = (colour << 24) | (rank as u32 & 0x00ff_ffff);
+    }
+    scratch.sort_unstable();
+    // Each colour's last partial group goes to the overflow colour (solved lane by lane,
+    // packed four to a group): the store then needs at most one group beyond the
+    // contacts themselves.
+    let mut at = 0usize;
+    while at < scratch.len() {
+        let colour = scratch.get(at).map_or(wide::OVERFLOW, |e| e.0 >> 24);
+        let mut end = at;
+        while scratch.get(end).is_some_and(|e| e.0 >> 24 == colour) {
+            end += 1;
+        }
+        if colour != wide::OVERFLOW {
+            let keep = at + (end - at) / 4 * 4;
+            for e in scratch.get_mut(keep..end).unwrap_or(&mut []) {
+                e.0 = (wide::OVERFLOW << 24) | (e.0 & 0x00ff_ffff);
+            }
+        }
+        at = end.max(at + 1);
+    }
+    scratch.sort_unstable();
+    // Groups: a new one every four lanes and at every change of colour.
+    let mut groups = 0usize;
+    let mut last: Option<(u32, usize)> = None;
+    for &(key, _) in scratch.iter() {
+        let colour = key >> 24;
+        match last {
+            Some((c, lanes)) if c == colour && lanes < 4 => last = Some((c, lanes + 1)),
+            _ => {
+                groups += 1;
+                last = Some((colour, 1));
+            }
+        }
+    }
+    let store = &mut solver.store;
+    if !store.reset(groups) {
+        return;
+    }
+    let mut group = 0usize;
+    let mut lane = 0usize;
+    let mut last: Option<u32> = None;
+    let mut k = ContactConstraint::default();
+    for &(key, ci) in scratch.iter() {
+        let colour = key >> 24;
+        if let Some(c) = last {
+            if c != colour || lane == 4 {
+                group += 1;
+                lane = 0;
+            }
+        }
+        if colour == wide::OVERFLOW && last != Some(wide::OVERFLOW) {
+            store.overflow_from = group as u32;
+        }
+        last = Some(colour);
+        let Some(c) = contacts.get(ci as usize) else {
+            continue;
+        };
+        if contact_solver::prepare(c, ci, bodies, &solver.bodies, &solver.index, cfg, &mut k) {
+            if let Some(mut g) = store.group(group) {
+                g.store_lane(lane, &k);
+            }
+        }
+        lane += 1;
+    }
+    if last != Some(wide::OVERFLOW) {
+        store.overflow_from = store.groups;
+    }
+}
+
+/// A fixed 32-bit hash of a contact key (splitmix64's finaliser).
+#[inline]
+fn pair_hash(key: u64) -> u32 {
+    let mut z = key.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) as u32
+}
+
+/// The collision pass over the lanes with restitution (`contact_solver::bounce`): up to
+/// `MAX_BOUNCE_PASSES` sweeps in group order.
+fn bounce<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    contacts: &[Contact],
+    cfg: &WorldConfig,
+) {
+    for _ in 0..contact_solver::MAX_BOUNCE_PASSES {
+        let mut bounced = false;
+        for g in 0..store.groups as usize {
+            let Some(mut group) = store.group(g) else {
+                break;
+            };
+            for l in 0..4 {
+                if group.contact(l) == NONE || group.restitution(l) <= 0.0 {
+                    continue;
+                }
+                let mut k = group.load_lane(l, contacts);
+                if contact_solver::bounce_constraint(&mut k, bodies, cfg) {
+                    group.store_lane(l, &k);
+                    bounced = true;
+                }
+            }
+        }
+        if !bounced {
+            break;
+        }
+    }
+}
+
+/// The restitution pass after the sub-steps (lanes with restitution), then every lane's
+/// accumulated impulses and stick/slip state back to its contact.
+fn restitution_and_store<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    contacts: &mut [Contact],
+    cfg: &WorldConfig,
+) {
+    for g in 0..store.groups as usize {
+        let Some(group) = store.group(g) else {
+            break;
+        };
+        for l in 0..4 {
+            let ci = group.contact(l);
+            if ci == NONE {
+                continue;
+            }
+            if group.restitution(l) > 0.0 {
+                let k = group.load_lane(l, contacts);
+                contact_solver::restitution(&k, bodies, cfg);
+            }
+            if let Some(c) = contacts.get_mut(ci as usize) {
+                group.store_impulses(l, c);
+            }
+        }
+    }
 }
 
 /// Copy the awake dynamic and kinematic bodies into `solver.bodies` (slot order) and

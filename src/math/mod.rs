@@ -3,10 +3,13 @@
 //! This is the only module that calls `libm` (or, with the feature `micromath`, its fast
 //! approximations): everything else reaches square roots and trigonometry through
 //! [`scalar`]. The simulation step itself uses only `+ − × ÷ √`, comparisons and selects,
-//! so it gives the same bits on every target. No `mul_add`, no SIMD, no intrinsics.
+//! so it gives the same bits on every target. No `mul_add`, no SIMD intrinsics: `lanes`
+//! runs four contacts side by side as plain `[f32; 4]` arithmetic, lane for lane the
+//! scalar operations, which compilers may vectorise without changing a bit.
 
 mod aabb;
 mod iso;
+pub(crate) mod lanes;
 mod mat3;
 mod quat;
 pub mod scalar;

@@ -1,0 +1,919 @@
+//! The contact rows four at a time: graph colouring, structure-of-arrays lanes, and the
+//! sub-step kernels (warm start, soft solve, relax) of `contact_solver.rs` written for
+//! four contacts side by side.
+//!
+//! # Colouring (Box2D v3's constraint graph)
+//!
+//! A colour holds contacts that share no moving dynamic body, so its contacts can be
+//! solved at the same time. Contacts are coloured in their deterministic order, each
+//! taking the lowest free colour: contacts between two dynamic bodies search colours
+//! `0..DYNAMIC_COLORS` upwards, contacts with a static, kinematic or sleeping partner
+//! search from the top colour downwards (so they tend to be solved late: Gauss-Seidel
+//! gives the last word to the last row, and a wall must win over a ball knocked into
+//! it). A contact that fits no colour goes to the overflow colour, whose groups are
+//! solved one lane after the other. Kinematic bodies never move in the solve (their
+//! velocity comes back unchanged), so they do not take colours.
+//!
+//! # Lanes
+//!
+//! Within a colour, contacts are packed four to a group in colour order; a colour's last
+//! partial group joins the overflow colour (so no lane is wasted but the last). Groups
+//! are solved in colour order, the overflow groups last. A group lives in four consecutive
+//! [`WideSlot`]s: slot `j` holds point `j` of the four contacts as `[f32; 4]` lanes,
+//! plus a quarter of the per-contact data (normal, tangents, friction patch, rolling),
+//! so the store costs what one scalar constraint per contact would. Every lane runs
+//! exactly the scalar rows of `contact_solver.rs` (same operations, same order), so the
+//! answer does not depend on whether the compiler vectorised the lanes, and the solve
+//! order (colours, then groups, then lanes) is the same on every target.
+
+use heapless::Vec as HVec;
+
+use super::contact::Contact;
+use super::contact_solver::{ConstraintPoint, ContactConstraint, Softness};
+use super::solver::{SolverBody, NONE};
+use crate::config::WorldConfig;
+use crate::math::lanes::{F4, M4, V4};
+use crate::math::{Mat3, Vec3};
+
+/// Colours of the constraint graph, overflow excluded (Box2D uses 24; a body rarely has
+/// more than a dozen contacts with other dynamic bodies).
+pub(crate) const COLORS: usize = 16;
+
+/// Colours contacts between two dynamic bodies may take (the others fill from the top).
+pub(crate) const DYNAMIC_COLORS: usize = 12;
+
+/// The overflow colour: groups solved one lane at a time.
+pub(crate) const OVERFLOW: u32 = COLORS as u32;
+
+/// Slots kept beside the `CONTACTS` main ones: one group, for the last partial overflow
+/// group (every colour's partial group joins the overflow colour, so the groups hold at
+/// most three empty lanes in all).
+pub(crate) const PAD_SLOTS: usize = 4;
+
+/// Per-contact data per slot quarter.
+const QUARTER: usize = 19;
+
+/// Point `j` of four contacts, lane per contact (symbols as in `contact_solver.rs`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct WidePoint {
+    local_a: V4,
+    local_b: V4,
+    adjusted: F4,
+    rn_a: V4,
+    rn_b: V4,
+    in_a: V4,
+    in_b: V4,
+    normal_mass: F4,
+    normal_impulse: F4,
+    twist_arm: F4,
+    separation: F4,
+    separation0: F4,
+    total_impulse: F4,
+    normal_speed0: F4,
+    bounced: F4,
+}
+
+/// A quarter of a group: one point of its four contacts, a quarter of their shared data,
+/// and four integers per lane (see the field docs of [`Group`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct WideSlot {
+    p: WidePoint,
+    s: [F4; QUARTER],
+    idx: [u32; 4],
+}
+
+// Quarter 0: normal, tangents, masses, softness, coefficients.
+const NORMAL: usize = 0;
+const T1: usize = 3;
+const T2: usize = 6;
+const INV_MASS_A: usize = 9;
+const INV_MASS_B: usize = 10;
+const BIAS_RATE: usize = 11;
+const MASS_SCALE: usize = 12;
+const IMPULSE_SCALE: usize = 13;
+const MU_S: usize = 14;
+const MU_K: usize = 15;
+const ROLLING: usize = 16;
+const TWIST: usize = 17;
+const RESTITUTION: usize = 18;
+// Quarter 1: patch Jacobians, tangent mass, patch impulse.
+const RT_A0: usize = 0;
+const RT_A1: usize = 3;
+const RT_B0: usize = 6;
+const RT_B1: usize = 9;
+const TANGENT_MASS: usize = 12;
+const TANGENT_IMPULSE: usize = 15;
+const RADIUS_SUM: usize = 17;
+// Quarter 2: patch inertia products, angular rows.
+const IT_A0: usize = 0;
+const IT_A1: usize = 3;
+const IT_B0: usize = 6;
+const IT_B1: usize = 9;
+const AXIS_MASS: usize = 12;
+const ANGULAR_IMPULSE: usize = 15;
+// Quarter 3: I⁻¹ times the three axes, both bodies.
+const IA_AXES: usize = 0;
+const IB_AXES: usize = 9;
+
+/// Flag bits of a lane's integer in slot 3 (above the point count in the low byte).
+const STICKING: u32 = 1 << 8;
+const ESTABLISHED: u32 = 1 << 9;
+
+#[inline]
+fn v4(s: &[F4; QUARTER], at: usize) -> V4 {
+    V4 {
+        x: s.get(at).copied().unwrap_or_default(),
+        y: s.get(at + 1).copied().unwrap_or_default(),
+        z: s.get(at + 2).copied().unwrap_or_default(),
+    }
+}
+
+#[inline]
+fn f4(s: &[F4; QUARTER], at: usize) -> F4 {
+    s.get(at).copied().unwrap_or_default()
+}
+
+#[inline]
+fn set_lane(s: &mut [F4; QUARTER], at: usize, l: usize, x: f32) {
+    if let Some(v) = s.get_mut(at) {
+        v.set(l, x);
+    }
+}
+
+#[inline]
+fn set_lane_v(s: &mut [F4; QUARTER], at: usize, l: usize, v: Vec3) {
+    set_lane(s, at, l, v.x);
+    set_lane(s, at + 1, l, v.y);
+    set_lane(s, at + 2, l, v.z);
+}
+
+#[inline]
+fn lane_v(s: &[F4; QUARTER], at: usize, l: usize) -> Vec3 {
+    Vec3::new(
+        f4(s, at).lane(l),
+        f4(s, at + 1).lane(l),
+        f4(s, at + 2).lane(l),
+    )
+}
+
+/// The four slots of one group, borrowed together.
+pub(crate) struct Group<'s> {
+    /// Point 0; per-contact quarter 0; per lane the solver index of body A.
+    s0: &'s mut WideSlot,
+    /// Point 1; quarter 1; per lane the solver index of body B.
+    s1: &'s mut WideSlot,
+    /// Point 2; quarter 2; per lane the contact index ([`NONE`]: an empty lane).
+    s2: &'s mut WideSlot,
+    /// Point 3; quarter 3; per lane the point count and the patch flags.
+    s3: &'s mut WideSlot,
+}
+
+/// The lane store of one step: the groups of the coloured constraints.
+#[derive(Clone, Debug)]
+pub(crate) struct WideStore<const C: usize> {
+    main: HVec<WideSlot, C>,
+    extra: HVec<WideSlot, PAD_SLOTS>,
+    /// Groups in use.
+    pub groups: u32,
+    /// The first overflow group (groups from here on are solved lane by lane).
+    pub overflow_from: u32,
+}
+
+impl<const C: usize> WideStore<C> {
+    /// Empty.
+    pub const fn new() -> Self {
+        WideStore {
+            main: HVec::new(),
+            extra: HVec::new(),
+            groups: 0,
+            overflow_from: 0,
+        }
+    }
+
+    /// Room for `groups` groups, every slot zeroed (empty lanes); false when the store
+    /// cannot hold them.
+    pub fn reset(&mut self, groups: usize) -> bool {
+        self.main.clear();
+        self.extra.clear();
+        self.groups = 0;
+        self.overflow_from = 0;
+        let slots = groups.saturating_mul(4);
+        if slots > C + PAD_SLOTS {
+            return false;
+        }
+        let in_main = slots.min(C);
+        // Cannot fail: both lengths are within capacity.
+        let _ = self.main.resize_default(in_main);
+        let _ = self.extra.resize_default(slots - in_main);
+        for g in 0..groups {
+            if let Some(group) = self.group(g) {
+                group.s0.idx = [NONE; 4];
+                group.s1.idx = [NONE; 4];
+                group.s2.idx = [NONE; 4];
+            }
+        }
+        self.groups = groups as u32;
+        true
+    }
+
+    /// The four slots of group `g`.
+    pub fn group(&mut self, g: usize) -> Option<Group<'_>> {
+        let start = g.checked_mul(4)?;
+        let (head, tail) = (&mut self.main, &mut self.extra);
+        let main_len = head.len();
+        let from_main = head.get_mut(start.min(main_len)..).unwrap_or(&mut []);
+        let skip = start.saturating_sub(main_len);
+        let from_extra = tail.get_mut(skip.min(PAD_SLOTS)..).unwrap_or(&mut []);
+        let mut it = from_main.iter_mut().chain(from_extra.iter_mut());
+        let (Some(s0), Some(s1), Some(s2), Some(s3)) = (it.next(), it.next(), it.next(), it.next())
+        else {
+            return None;
+        };
+        Some(Group { s0, s1, s2, s3 })
+    }
+}
+
+impl Group<'_> {
+    fn point(&self, j: usize) -> &WidePoint {
+        match j {
+            0 => &self.s0.p,
+            1 => &self.s1.p,
+            2 => &self.s2.p,
+            _ => &self.s3.p,
+        }
+    }
+
+    fn point_mut(&mut self, j: usize) -> &mut WidePoint {
+        match j {
+            0 => &mut self.s0.p,
+            1 => &mut self.s1.p,
+            2 => &mut self.s2.p,
+            _ => &mut self.s3.p,
+        }
+    }
+
+    /// The contact index of lane `l`, or [`NONE`] for an empty lane.
+    pub fn contact(&self, l: usize) -> u32 {
+        self.s2.idx.get(l).copied().unwrap_or(NONE)
+    }
+
+    /// Lanes holding a contact.
+    fn active(&self) -> [bool; 4] {
+        core::array::from_fn(|l| self.contact(l) != NONE)
+    }
+
+    /// Copy lane `l`'s accumulated impulses and stick/slip state into contact `c`.
+    pub fn store_impulses(&self, l: usize, c: &mut Contact) {
+        let flags = self.s3.idx.get(l).copied().unwrap_or(0);
+        let len = usize::from(c.len).min((flags & 0xff) as usize);
+        for (j, q) in c.points.iter_mut().take(len).enumerate() {
+            q.normal_impulse = self.point(j).normal_impulse.lane(l);
+        }
+        let (q0, q1, q2) = (&self.s0.s, &self.s1.s, &self.s2.s);
+        let t1 = lane_v(q0, T1, l);
+        let t2 = lane_v(q0, T2, l);
+        c.friction_impulse =
+            t1 * f4(q1, TANGENT_IMPULSE).lane(l) + t2 * f4(q1, TANGENT_IMPULSE + 1).lane(l);
+        c.twist_impulse = f4(q2, ANGULAR_IMPULSE + 2).lane(l);
+        c.sticking = flags & STICKING != 0;
+    }
+
+    /// True when some point of lane `l` ended the solve deeper than `depth` (negative).
+    pub fn deeper_than(&self, l: usize, depth: f32) -> bool {
+        let len = self.s3.idx.get(l).map_or(0, |f| (f & 0xff) as usize);
+        (0..len.min(4)).any(|j| self.point(j).separation.lane(l) < depth)
+    }
+
+    /// The restitution of lane `l`.
+    pub fn restitution(&self, l: usize) -> f32 {
+        f4(&self.s0.s, RESTITUTION).lane(l)
+    }
+
+    /// Write constraint `k` into lane `l` (its points, patch and rows).
+    pub fn store_lane(&mut self, l: usize, k: &ContactConstraint) {
+        let (s0, s1, s2, s3) = (
+            &mut self.s0.s,
+            &mut self.s1.s,
+            &mut self.s2.s,
+            &mut self.s3.s,
+        );
+        set_lane_v(s0, NORMAL, l, k.normal);
+        set_lane_v(s0, T1, l, k.tangents[0]);
+        set_lane_v(s0, T2, l, k.tangents[1]);
+        set_lane(s0, INV_MASS_A, l, k.inv_mass_a);
+        set_lane(s0, INV_MASS_B, l, k.inv_mass_b);
+        set_lane(s0, BIAS_RATE, l, k.softness.bias_rate);
+        set_lane(s0, MASS_SCALE, l, k.softness.mass_scale);
+        set_lane(s0, IMPULSE_SCALE, l, k.softness.impulse_scale);
+        set_lane(s0, MU_S, l, k.friction[0]);
+        set_lane(s0, MU_K, l, k.friction[1]);
+        set_lane(s0, ROLLING, l, k.rolling);
+        set_lane(s0, TWIST, l, k.twist);
+        set_lane(s0, RESTITUTION, l, k.restitution);
+        set_lane_v(s1, RT_A0, l, k.rt_a[0]);
+        set_lane_v(s1, RT_A1, l, k.rt_a[1]);
+        set_lane_v(s1, RT_B0, l, k.rt_b[0]);
+        set_lane_v(s1, RT_B1, l, k.rt_b[1]);
+        for (i, m) in k.tangent_mass.iter().enumerate() {
+            set_lane(s1, TANGENT_MASS + i, l, *m);
+        }
+        for (i, t) in k.tangent_impulse.iter().enumerate() {
+            set_lane(s1, TANGENT_IMPULSE + i, l, *t);
+        }
+        set_lane(s1, RADIUS_SUM, l, k.radius_sum);
+        set_lane_v(s2, IT_A0, l, k.it_a[0]);
+        set_lane_v(s2, IT_A1, l, k.it_a[1]);
+        set_lane_v(s2, IT_B0, l, k.it_b[0]);
+        set_lane_v(s2, IT_B1, l, k.it_b[1]);
+        for i in 0..3 {
+            set_lane(
+                s2,
+                AXIS_MASS + i,
+                l,
+                k.axis_mass.get(i).copied().unwrap_or(0.0),
+            );
+            set_lane(
+                s2,
+                ANGULAR_IMPULSE + i,
+                l,
+                k.angular_impulse.get(i).copied().unwrap_or(0.0),
+            );
+            set_lane_v(
+                s3,
+                IA_AXES + 3 * i,
+                l,
+                k.ia_axes.get(i).copied().unwrap_or_default(),
+            );
+            set_lane_v(
+                s3,
+                IB_AXES + 3 * i,
+                l,
+                k.ib_axes.get(i).copied().unwrap_or_default(),
+            );
+        }
+        if let Some(x) = self.s0.idx.get_mut(l) {
+            *x = k.a;
+        }
+        if let Some(x) = self.s1.idx.get_mut(l) {
+            *x = k.b;
+        }
+        if let Some(x) = self.s2.idx.get_mut(l) {
+            *x = k.contact;
+        }
+        let flags = u32::from(k.len)
+            | if k.sticking { STICKING } else { 0 }
+            | if k.established { ESTABLISHED } else { 0 };
+        if let Some(x) = self.s3.idx.get_mut(l) {
+            *x = flags;
+        }
+        for j in 0..4 {
+            let src = k.points.get(j).copied().unwrap_or_default();
+            let used = j < usize::from(k.len);
+            let p = self.point_mut(j);
+            let src = if used {
+                src
+            } else {
+                ConstraintPoint::default()
+            };
+            // A body without a solver entry keeps its world lever arm as its anchor.
+            let local_a = if k.a == NONE { src.core_a } else { src.local_a };
+            let local_b = if k.b == NONE { src.core_b } else { src.local_b };
+            p.local_a.set(l, local_a);
+            p.local_b.set(l, local_b);
+            p.adjusted.set(l, src.adjusted_separation);
+            p.rn_a.set(l, src.rn_a);
+            p.rn_b.set(l, src.rn_b);
+            p.in_a.set(l, src.in_a);
+            p.in_b.set(l, src.in_b);
+            p.normal_mass.set(l, src.normal_mass);
+            p.normal_impulse.set(l, src.normal_impulse);
+            p.twist_arm.set(l, src.twist_arm);
+            p.separation.set(l, src.separation);
+            p.separation0.set(l, src.separation0);
+            p.total_impulse.set(l, src.total_impulse);
+            p.normal_speed0.set(l, src.normal_speed0);
+            p.bounced.set(l, if src.bounced { 1.0 } else { 0.0 });
+        }
+    }
+
+    /// Lane `l` as a scalar constraint (the inverse of [`Group::store_lane`]; the pool
+    /// slots are taken from `contacts`).
+    pub fn load_lane(&self, l: usize, contacts: &[Contact]) -> ContactConstraint {
+        let (s0, s1, s2, s3) = (&self.s0.s, &self.s1.s, &self.s2.s, &self.s3.s);
+        let contact = self.contact(l);
+        let (slot_a, slot_b) = contacts
+            .get(contact as usize)
+            .map_or((NONE, NONE), |c| (c.a, c.b));
+        let flags = self.s3.idx.get(l).copied().unwrap_or(0);
+        let a = self.s0.idx.get(l).copied().unwrap_or(NONE);
+        let b = self.s1.idx.get(l).copied().unwrap_or(NONE);
+        let mut k = ContactConstraint {
+            contact,
+            slot_a,
+            slot_b,
+            a,
+            b,
+            inv_mass_a: f4(s0, INV_MASS_A).lane(l),
+            inv_mass_b: f4(s0, INV_MASS_B).lane(l),
+            normal: lane_v(s0, NORMAL, l),
+            tangents: [lane_v(s0, T1, l), lane_v(s0, T2, l)],
+            len: (flags & 0xff).min(4) as u8,
+            rt_a: [lane_v(s1, RT_A0, l), lane_v(s1, RT_A1, l)],
+            rt_b: [lane_v(s1, RT_B0, l), lane_v(s1, RT_B1, l)],
+            it_a: [lane_v(s2, IT_A0, l), lane_v(s2, IT_A1, l)],
+            it_b: [lane_v(s2, IT_B0, l), lane_v(s2, IT_B1, l)],
+            tangent_mass: core::array::from_fn(|i| f4(s1, TANGENT_MASS + i).lane(l)),
+            tangent_impulse: core::array::from_fn(|i| f4(s1, TANGENT_IMPULSE + i).lane(l)),
+            ia_axes: core::array::from_fn(|i| lane_v(s3, IA_AXES + 3 * i, l)),
+            ib_axes: core::array::from_fn(|i| lane_v(s3, IB_AXES + 3 * i, l)),
+            axis_mass: core::array::from_fn(|i| f4(s2, AXIS_MASS + i).lane(l)),
+            angular_impulse: core::array::from_fn(|i| f4(s2, ANGULAR_IMPULSE + i).lane(l)),
+            friction: [f4(s0, MU_S).lane(l), f4(s0, MU_K).lane(l)],
+            restitution: f4(s0, RESTITUTION).lane(l),
+            rolling: f4(s0, ROLLING).lane(l),
+            twist: f4(s0, TWIST).lane(l),
+            softness: Softness {
+                bias_rate: f4(s0, BIAS_RATE).lane(l),
+                mass_scale: f4(s0, MASS_SCALE).lane(l),
+                impulse_scale: f4(s0, IMPULSE_SCALE).lane(l),
+            },
+            radius_sum: f4(s1, RADIUS_SUM).lane(l),
+            sticking: flags & STICKING != 0,
+            established: flags & ESTABLISHED != 0,
+            ..ContactConstraint::default()
+        };
+        for j in 0..usize::from(k.len) {
+            let p = self.point(j);
+            let local_a = p.local_a.lane(l);
+            let local_b = p.local_b.lane(l);
+            if let Some(dst) = k.points.get_mut(j) {
+                *dst = ConstraintPoint {
+                    local_a,
+                    local_b,
+                    core_a: local_a,
+                    core_b: local_b,
+                    adjusted_separation: p.adjusted.lane(l),
+                    rn_a: p.rn_a.lane(l),
+                    rn_b: p.rn_b.lane(l),
+                    in_a: p.in_a.lane(l),
+                    in_b: p.in_b.lane(l),
+                    normal_mass: p.normal_mass.lane(l),
+                    normal_impulse: p.normal_impulse.lane(l),
+                    twist_arm: p.twist_arm.lane(l),
+                    separation0: p.separation0.lane(l),
+                    separation: p.separation.lane(l),
+                    total_impulse: p.total_impulse.lane(l),
+                    normal_speed0: p.normal_speed0.lane(l),
+                    bounced: p.bounced.lane(l) != 0.0,
+                };
+            }
+        }
+        k
+    }
+}
+
+/// The colour of a contact between solver bodies `a` and `b` (indices into `bodies`,
+/// [`NONE`] for none) that moves at least one of them, marking the colour on the moving
+/// bodies; [`OVERFLOW`] when none is free (module docs).
+pub(crate) fn colour(bodies: &mut [SolverBody], a: u32, b: u32) -> u32 {
+    let moving =
+        |bodies: &[SolverBody], i: u32| bodies.get(i as usize).is_some_and(|s| s.inv_mass > 0.0);
+    let (ma, mb) = (moving(bodies, a), moving(bodies, b));
+    let used = |bodies: &[SolverBody], i: u32, on: bool| {
+        if on {
+            bodies.get(i as usize).map_or(0, |s| s.colours)
+        } else {
+            0
+        }
+    };
+    let taken = used(bodies, a, ma) | used(bodies, b, mb);
+    let pick = if ma && mb {
+        (0..DYNAMIC_COLORS as u32).find(|c| taken & (1 << c) == 0)
+    } else {
+        (0..COLORS as u32).rev().find(|c| taken & (1 << c) == 0)
+    };
+    let Some(c) = pick else {
+        return OVERFLOW;
+    };
+    for (i, on) in [(a, ma), (b, mb)] {
+        if on {
+            if let Some(s) = bodies.get_mut(i as usize) {
+                s.colours |= 1 << c;
+            }
+        }
+    }
+    c
+}
+
+/// Velocities, displacement and rotation of four solver bodies (zero and identity for
+/// [`NONE`] lanes).
+struct Bodies4 {
+    v: V4,
+    w: V4,
+    dp: V4,
+    rot: M4,
+}
+
+impl Bodies4 {
+    fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
+        let mut g = Bodies4 {
+            v: V4::default(),
+            w: V4::default(),
+            dp: V4::default(),
+            rot: M4::default(),
+        };
+        for (l, i) in idx.iter().enumerate() {
+            match bodies.get(*i as usize) {
+                Some(b) => {
+                    g.v.set(l, b.v);
+                    g.w.set(l, b.w);
+                    g.dp.set(l, b.dp);
+                    g.rot.set(l, &b.rot);
+                }
+                None => g.rot.set(l, &Mat3::IDENTITY),
+            }
+        }
+        g
+    }
+
+    fn scatter(&self, bodies: &mut [SolverBody], idx: &[u32; 4], active: [bool; 4]) {
+        for (l, (i, on)) in idx.iter().zip(active).enumerate() {
+            if !on {
+                continue;
+            }
+            if let Some(b) = bodies.get_mut(*i as usize) {
+                b.v = self.v.lane(l);
+                b.w = self.w.lane(l);
+            }
+        }
+    }
+}
+
+/// Which lanes to solve in one pass over a group: all active lanes of a coloured group,
+/// or one lane at a time for an overflow group (whose lanes may share bodies).
+fn passes(group: &Group<'_>, overflow: bool) -> ([[bool; 4]; 4], usize) {
+    let active = group.active();
+    if !overflow {
+        return ([active, [false; 4], [false; 4], [false; 4]], 1);
+    }
+    let mut out = [[false; 4]; 4];
+    let mut n = 0;
+    for (l, on) in active.iter().enumerate() {
+        if *on {
+            if let Some(p) = out.get_mut(n) {
+                if let Some(x) = p.get_mut(l) {
+                    *x = true;
+                }
+            }
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
+/// Apply the accumulated impulses of every group (start of each sub-step).
+pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut [SolverBody]) {
+    for g in 0..store.groups as usize {
+        let overflow = g as u32 >= store.overflow_from;
+        let Some(mut group) = store.group(g) else {
+            break;
+        };
+        let (masks, n) = passes(&group, overflow);
+        for mask in masks.iter().take(n) {
+            warm_start_group(&mut group, bodies, *mask);
+        }
+    }
+}
+
+fn warm_start_group(group: &mut Group<'_>, bodies: &mut [SolverBody], mask: [bool; 4]) {
+    let ia = group.s0.idx;
+    let ib = group.s1.idx;
+    let mut a = Bodies4::gather(bodies, &ia);
+    let mut b = Bodies4::gather(bodies, &ib);
+    let keep = |x: F4| F4::ZERO.select_where(mask, x);
+    let shared = Shared::load(&group.s0.s);
+    for j in 0..4 {
+        let p = &group.point(j);
+        let lambda = keep(p.normal_impulse);
+        let jn = shared.n.scale(lambda);
+        a.v.sub_scaled(&jn, shared.ma);
+        a.w.sub_scaled(&p.in_a, lambda);
+        b.v.add_scaled(&jn, shared.mb);
+        b.w.add_scaled(&p.in_b, lambda);
+    }
+    let (q1, q2, q3) = (&group.s1.s, &group.s2.s, &group.s3.s);
+    let l0 = keep(f4(q1, TANGENT_IMPULSE));
+    let l1 = keep(f4(q1, TANGENT_IMPULSE + 1));
+    push_tangent(&mut a, &mut b, &shared, q2, [l0, l1]);
+    for i in 0..3 {
+        let lambda = keep(f4(q2, ANGULAR_IMPULSE + i));
+        if lambda.0 != [0.0; 4] {
+            a.w.sub_scaled(&v4(q3, IA_AXES + 3 * i), lambda);
+            b.w.add_scaled(&v4(q3, IB_AXES + 3 * i), lambda);
+        }
+    }
+    a.scatter(bodies, &ia, mask);
+    b.scatter(bodies, &ib, mask);
+}
+
+/// The per-contact values of quarter 0 the rows read, copied once per group visit.
+struct Shared {
+    n: V4,
+    t1: V4,
+    t2: V4,
+    ma: F4,
+    mb: F4,
+    bias_rate: F4,
+    mass_scale: F4,
+    impulse_scale: F4,
+    mu_s: F4,
+    mu_k: F4,
+    rolling: F4,
+    twist: F4,
+}
+
+impl Shared {
+    #[inline]
+    fn load(q0: &[F4; QUARTER]) -> Shared {
+        Shared {
+            n: v4(q0, NORMAL),
+            t1: v4(q0, T1),
+            t2: v4(q0, T2),
+            ma: f4(q0, INV_MASS_A),
+            mb: f4(q0, INV_MASS_B),
+            bias_rate: f4(q0, BIAS_RATE),
+            mass_scale: f4(q0, MASS_SCALE),
+            impulse_scale: f4(q0, IMPULSE_SCALE),
+            mu_s: f4(q0, MU_S),
+            mu_k: f4(q0, MU_K),
+            rolling: f4(q0, ROLLING),
+            twist: f4(q0, TWIST),
+        }
+    }
+}
+
+/// Apply `(λ₁, λ₂)` along the tangents at the friction centres.
+#[inline]
+fn push_tangent(a: &mut Bodies4, b: &mut Bodies4, sh: &Shared, q2: &[F4; QUARTER], l: [F4; 2]) {
+    let j = sh.t1.scale(l[0]).add(&sh.t2.scale(l[1]));
+    a.v.sub_scaled(&j, sh.ma);
+    a.w.sub_scaled(&v4(q2, IT_A0), l[0]);
+    a.w.sub_scaled(&v4(q2, IT_A1), l[1]);
+    b.v.add_scaled(&j, sh.mb);
+    b.w.add_scaled(&v4(q2, IT_B0), l[0]);
+    b.w.add_scaled(&v4(q2, IT_B1), l[1]);
+}
+
+/// One iteration over every group: normal rows (soft with `use_bias`, rigid without),
+/// the friction patch, twist and rolling; `last` marks the last relax iteration of the
+/// step, where stick/slip changes.
+pub(crate) fn solve<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+    inv_h: f32,
+    use_bias: bool,
+    last: bool,
+) {
+    for g in 0..store.groups as usize {
+        let overflow = g as u32 >= store.overflow_from;
+        let Some(mut group) = store.group(g) else {
+            break;
+        };
+        let (masks, n) = passes(&group, overflow);
+        for mask in masks.iter().take(n) {
+            solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, *mask);
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn solve_group(
+    group: &mut Group<'_>,
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+    inv_h: f32,
+    use_bias: bool,
+    last: bool,
+    mask: [bool; 4],
+) {
+    let ia = group.s0.idx;
+    let ib = group.s1.idx;
+    let mut a = Bodies4::gather(bodies, &ia);
+    let mut b = Bodies4::gather(bodies, &ib);
+    let sh = Shared::load(&group.s0.s);
+    let n = sh.n;
+    let (one, zero) = (F4::splat(1.0), F4::ZERO);
+    let (soft_bias, soft_mass, soft_impulse) = if use_bias {
+        (
+            sh.mass_scale * sh.bias_rate,
+            sh.mass_scale,
+            sh.impulse_scale,
+        )
+    } else {
+        (zero, one, zero)
+    };
+    let max_push = F4::splat(-cfg.max_push_speed);
+    let inv_h = F4::splat(inv_h);
+    let mut total = zero;
+    let mut levers = zero;
+    for j in 0..4 {
+        let p = group.point_mut(j);
+        // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
+        let anchor_a = a.dp.add(&a.rot.mul_vec(&p.local_a));
+        let anchor_b = b.dp.add(&b.rot.mul_vec(&p.local_b));
+        let s = p.adjusted + n.dot(&anchor_b.sub(&anchor_a));
+        // Speculative (s > 0): rigid, close the gap; else soft push-out (or none).
+        let soft_push = (soft_bias * s).max(max_push);
+        let bias = s.gt_select(zero, s * inv_h, soft_push);
+        let mass_scale = s.gt_select(zero, one, soft_mass);
+        let impulse_scale = s.gt_select(zero, zero, soft_impulse);
+        let vn = n.dot(&b.v.sub(&a.v)) + b.w.dot(&p.rn_b) - a.w.dot(&p.rn_a);
+        let lambda = -(p.normal_mass * (mass_scale * vn + bias)) - impulse_scale * p.normal_impulse;
+        // Lanes outside `mask` keep their impulse (and are not written back).
+        let old = p.normal_impulse;
+        let new = old.select_where(mask, (old + lambda).max(zero));
+        let delta = new - old;
+        let jn = n.scale(delta);
+        a.v.sub_scaled(&jn, sh.ma);
+        a.w.sub_scaled(&p.in_a, delta);
+        b.v.add_scaled(&jn, sh.mb);
+        b.w.add_scaled(&p.in_b, delta);
+        total += new;
+        levers += new * p.twist_arm;
+        p.normal_impulse = new;
+        p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
+        p.separation = p.separation.select_where(mask, s);
+    }
+    solve_patch(group, &sh, &mut a, &mut b, cfg, total, levers, last, mask);
+    solve_rolling(group, &sh, &mut a, &mut b, total, mask);
+    a.scatter(bodies, &ia, mask);
+    b.scatter(bodies, &ib, mask);
+}
+
+/// Tangent speeds at the friction centres.
+#[inline]
+fn tangent_speeds(a: &Bodies4, b: &Bodies4, sh: &Shared, q1: &[F4; QUARTER]) -> [F4; 2] {
+    let dv = b.v.sub(&a.v);
+    [
+        sh.t1.dot(&dv) + b.w.dot(&v4(q1, RT_B0)) - a.w.dot(&v4(q1, RT_A0)),
+        sh.t2.dot(&dv) + b.w.dot(&v4(q1, RT_B1)) - a.w.dot(&v4(q1, RT_A1)),
+    ]
+}
+
+/// Lane-wise `v` shortened to length at most `radius` (zero where the radius is not
+/// positive), and which lanes were shortened; as `contact_solver::clip_to_disc`.
+#[inline]
+fn clip_to_disc(v: [F4; 2], radius: F4) -> ([F4; 2], [bool; 4]) {
+    let l2 = v[0] * v[0] + v[1] * v[1];
+    let r2 = radius * radius;
+    let root = l2.sqrt();
+    let mut out = v;
+    let mut clipped = [false; 4];
+    for l in 0..4 {
+        let (x, y, r) = (v[0].lane(l), v[1].lane(l), radius.lane(l));
+        let (nx, ny, c) = if r.is_nan() || r <= 0.0 {
+            (0.0, 0.0, x != 0.0 || y != 0.0)
+        } else if l2.lane(l) > r2.lane(l) {
+            let s = r / root.lane(l);
+            (x * s, y * s, true)
+        } else {
+            (x, y, false)
+        };
+        out[0].set(l, nx);
+        out[1].set(l, ny);
+        if let Some(m) = clipped.get_mut(l) {
+            *m = c;
+        }
+    }
+    (out, clipped)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn solve_patch(
+    group: &mut Group<'_>,
+    sh: &Shared,
+    a: &mut Bodies4,
+    b: &mut Bodies4,
+    cfg: &WorldConfig,
+    total: F4,
+    levers: F4,
+    last: bool,
+    mask: [bool; 4],
+) {
+    let flags = group.s3.idx;
+    let (q1, q2, q3) = (&mut group.s1.s, &mut group.s2.s, &group.s3.s);
+    let sticking: [bool; 4] =
+        core::array::from_fn(|l| flags.get(l).is_some_and(|f| f & STICKING != 0));
+    let mu = sh.mu_k.select_where(sticking, sh.mu_s);
+    let v = tangent_speeds(a, b, sh, q1);
+    let (mxx, mxy, myy) = (
+        f4(q1, TANGENT_MASS),
+        f4(q1, TANGENT_MASS + 1),
+        f4(q1, TANGENT_MASS + 2),
+    );
+    let old = [f4(q1, TANGENT_IMPULSE), f4(q1, TANGENT_IMPULSE + 1)];
+    let wanted = [
+        old[0] - (mxx * v[0] + mxy * v[1]),
+        old[1] - (mxy * v[0] + myy * v[1]),
+    ];
+    let (clipped_new, clipped) = clip_to_disc(wanted, mu * total);
+    let mut new = [
+        old[0].select_where(mask, clipped_new[0]),
+        old[1].select_where(mask, clipped_new[1]),
+    ];
+    push_tangent(a, b, sh, q2, [new[0] - old[0], new[1] - old[1]]);
+    let mut flags_out = flags;
+    if last {
+        let after = tangent_speeds(a, b, sh, q1);
+        let stick2 = cfg.stick_speed * cfg.stick_speed;
+        let (kinetic, _) = clip_to_disc(new, sh.mu_k * total);
+        let mut fix = [F4::ZERO; 2];
+        for l in 0..4 {
+            if !mask.get(l).copied().unwrap_or(false) {
+                continue;
+            }
+            let slip2 = after[0].lane(l) * after[0].lane(l) + after[1].lane(l) * after[1].lane(l);
+            let f = flags.get(l).copied().unwrap_or(0);
+            let (st, est) = (f & STICKING != 0, f & ESTABLISHED != 0);
+            let was_clipped = clipped.get(l).copied().unwrap_or(false);
+            if st && est && was_clipped && slip2 >= stick2 {
+                // The static cone gave way: slide, at the kinetic cone from now on.
+                if let Some(x) = flags_out.get_mut(l) {
+                    *x &= !STICKING;
+                }
+                fix[0].set(l, kinetic[0].lane(l) - new[0].lane(l));
+                fix[1].set(l, kinetic[1].lane(l) - new[1].lane(l));
+                new[0].set(l, kinetic[0].lane(l));
+                new[1].set(l, kinetic[1].lane(l));
+            } else if !st && slip2 < stick2 {
+                if let Some(x) = flags_out.get_mut(l) {
+                    *x |= STICKING;
+                }
+            }
+        }
+        push_tangent(a, b, sh, q2, fix);
+    }
+    if let Some(x) = q1.get_mut(TANGENT_IMPULSE) {
+        *x = new[0];
+    }
+    if let Some(y) = q1.get_mut(TANGENT_IMPULSE + 1) {
+        *y = new[1];
+    }
+    // Twist about the normal at the centre: the points' spread, or a single point's
+    // twist friction.
+    let sticking: [bool; 4] =
+        core::array::from_fn(|l| flags_out.get(l).is_some_and(|f| f & STICKING != 0));
+    let mu = sh.mu_k.select_where(sticking, sh.mu_s);
+    let limit = mu * levers + sh.twist * total;
+    let old = f4(q2, ANGULAR_IMPULSE + 2);
+    let dw = b.w.sub(&a.w);
+    let wanted = old - f4(q2, AXIS_MASS + 2) * dw.dot(&sh.n);
+    let new_twist = wanted.clamp(-limit, limit);
+    // Lanes without a limit keep their impulse (as the scalar row skips them).
+    let has_limit: [bool; 4] =
+        core::array::from_fn(|l| mask.get(l).copied().unwrap_or(false) && limit.lane(l) > 0.0);
+    let new_twist = old.select_where(has_limit, new_twist);
+    let delta = new_twist - old;
+    a.w.sub_scaled(&v4(q3, IA_AXES + 6), delta);
+    b.w.add_scaled(&v4(q3, IB_AXES + 6), delta);
+    if let Some(x) = q2.get_mut(ANGULAR_IMPULSE + 2) {
+        *x = new_twist;
+    }
+    group.s3.idx = flags_out;
+}
+
+fn solve_rolling(
+    group: &mut Group<'_>,
+    sh: &Shared,
+    a: &mut Bodies4,
+    b: &mut Bodies4,
+    total: F4,
+    mask: [bool; 4],
+) {
+    let on: [bool; 4] =
+        core::array::from_fn(|l| mask.get(l).copied().unwrap_or(false) && sh.rolling.lane(l) > 0.0);
+    if !on.iter().any(|x| *x) {
+        return;
+    }
+    let (q2, q3) = (&mut group.s2.s, &group.s3.s);
+    let dw = b.w.sub(&a.w);
+    let old = [f4(q2, ANGULAR_IMPULSE), f4(q2, ANGULAR_IMPULSE + 1)];
+    let wanted = [
+        old[0] - f4(q2, AXIS_MASS) * dw.dot(&sh.t1),
+        old[1] - f4(q2, AXIS_MASS + 1) * dw.dot(&sh.t2),
+    ];
+    let (clip, _) = clip_to_disc(wanted, sh.rolling * total);
+    let new = [
+        old[0].select_where(on, clip[0]),
+        old[1].select_where(on, clip[1]),
+    ];
+    for i in 0..2 {
+        let d = new.get(i).copied().unwrap_or_default() - old.get(i).copied().unwrap_or_default();
+        a.w.sub_scaled(&v4(q3, IA_AXES + 3 * i), d);
+        b.w.add_scaled(&v4(q3, IB_AXES + 3 * i), d);
+        if let Some(x) = q2.get_mut(ANGULAR_IMPULSE + i) {
+            *x = new.get(i).copied().unwrap_or_default();
+        }
+    }
+}

@@ -1,0 +1,298 @@
+//! Four lanes of `f32`: the arithmetic of the wide contact solver.
+//!
+//! Every operation is the scalar operation applied to each lane, in the same order, with
+//! the same rounding (`+ − × ÷ √`, compares and selects; no fused multiply-add, no
+//! reciprocal estimates, no horizontal sums). A compiler that vectorises these loops
+//! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32) and one that does not (a
+//! Cortex-M) produce the same bits lane for lane, so the golden checksums hold across
+//! targets. Written as plain arrays: no intrinsics, no `unsafe`.
+
+use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
+
+use super::{scalar, Mat3, Vec3};
+
+/// Four `f32` lanes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct F4(pub [f32; 4]);
+
+impl F4 {
+    /// Zero in every lane.
+    pub const ZERO: F4 = F4([0.0; 4]);
+
+    /// `x` in every lane.
+    #[inline]
+    pub const fn splat(x: f32) -> F4 {
+        F4([x; 4])
+    }
+
+    /// Lane `l` (0 for an index out of range).
+    #[inline]
+    pub fn lane(self, l: usize) -> f32 {
+        self.0.get(l).copied().unwrap_or(0.0)
+    }
+
+    /// Set lane `l` (ignored out of range).
+    #[inline]
+    pub fn set(&mut self, l: usize, x: f32) {
+        if let Some(v) = self.0.get_mut(l) {
+            *v = x;
+        }
+    }
+
+    /// Lane-wise [`scalar::max`].
+    #[inline]
+    pub fn max(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([
+            scalar::max(a0, b0),
+            scalar::max(a1, b1),
+            scalar::max(a2, b2),
+            scalar::max(a3, b3),
+        ])
+    }
+
+    /// Lane-wise [`scalar::clamp`] to `[lo, hi]`.
+    #[inline]
+    pub fn clamp(self, lo: F4, hi: F4) -> F4 {
+        let [x0, x1, x2, x3] = self.0;
+        let [l0, l1, l2, l3] = lo.0;
+        let [h0, h1, h2, h3] = hi.0;
+        F4([
+            scalar::clamp(x0, l0, h0),
+            scalar::clamp(x1, l1, h1),
+            scalar::clamp(x2, l2, h2),
+            scalar::clamp(x3, l3, h3),
+        ])
+    }
+
+    /// Lane-wise [`scalar::sqrt`].
+    #[inline]
+    pub fn sqrt(self) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        F4([
+            scalar::sqrt(a0),
+            scalar::sqrt(a1),
+            scalar::sqrt(a2),
+            scalar::sqrt(a3),
+        ])
+    }
+
+    /// Lane-wise `if self > o { a } else { b }`.
+    #[inline]
+    pub fn gt_select(self, o: F4, a: F4, b: F4) -> F4 {
+        let mut r = b;
+        for ((r, (x, y)), v) in r.0.iter_mut().zip(self.0.iter().zip(o.0.iter())).zip(a.0) {
+            if *x > *y {
+                *r = v;
+            }
+        }
+        r
+    }
+
+    /// Lane-wise `if mask { a } else { self }`.
+    #[inline]
+    pub fn select_where(self, mask: [bool; 4], a: F4) -> F4 {
+        let mut r = self;
+        for ((r, m), v) in r.0.iter_mut().zip(mask).zip(a.0) {
+            if m {
+                *r = v;
+            }
+        }
+        r
+    }
+}
+
+impl Add for F4 {
+    type Output = F4;
+    #[inline]
+    fn add(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([a0 + b0, a1 + b1, a2 + b2, a3 + b3])
+    }
+}
+
+impl Sub for F4 {
+    type Output = F4;
+    #[inline]
+    fn sub(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([a0 - b0, a1 - b1, a2 - b2, a3 - b3])
+    }
+}
+
+impl Mul for F4 {
+    type Output = F4;
+    #[inline]
+    fn mul(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([a0 * b0, a1 * b1, a2 * b2, a3 * b3])
+    }
+}
+
+impl Neg for F4 {
+    type Output = F4;
+    #[inline]
+    fn neg(self) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        F4([-a0, -a1, -a2, -a3])
+    }
+}
+
+impl AddAssign for F4 {
+    #[inline]
+    fn add_assign(&mut self, o: F4) {
+        *self = *self + o;
+    }
+}
+
+impl SubAssign for F4 {
+    #[inline]
+    fn sub_assign(&mut self, o: F4) {
+        *self = *self - o;
+    }
+}
+
+/// Four [`Vec3`] lanes, structure of arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct V4 {
+    /// x of each lane.
+    pub x: F4,
+    /// y of each lane.
+    pub y: F4,
+    /// z of each lane.
+    pub z: F4,
+}
+
+impl V4 {
+    /// Lane `l` as a [`Vec3`].
+    #[inline]
+    pub fn lane(&self, l: usize) -> Vec3 {
+        Vec3::new(self.x.lane(l), self.y.lane(l), self.z.lane(l))
+    }
+
+    /// Set lane `l`.
+    #[inline]
+    pub fn set(&mut self, l: usize, v: Vec3) {
+        self.x.set(l, v.x);
+        self.y.set(l, v.y);
+        self.z.set(l, v.z);
+    }
+
+    /// Dot product per lane, `x·x + y·y + z·z` in that order (as [`Vec3::dot`]).
+    #[inline]
+    pub fn dot(&self, o: &V4) -> F4 {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+
+    /// Every lane scaled by its `s`.
+    #[inline]
+    pub fn scale(&self, s: F4) -> V4 {
+        V4 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+
+    /// Lane-wise sum.
+    #[inline]
+    pub fn add(&self, o: &V4) -> V4 {
+        V4 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+
+    /// Lane-wise difference.
+    #[inline]
+    pub fn sub(&self, o: &V4) -> V4 {
+        V4 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+
+    /// `self += o · s`.
+    #[inline]
+    pub fn add_scaled(&mut self, o: &V4, s: F4) {
+        self.x += o.x * s;
+        self.y += o.y * s;
+        self.z += o.z * s;
+    }
+
+    /// `self −= o · s`.
+    #[inline]
+    pub fn sub_scaled(&mut self, o: &V4, s: F4) {
+        self.x -= o.x * s;
+        self.y -= o.y * s;
+        self.z -= o.z * s;
+    }
+}
+
+/// Four [`Mat3`] lanes (columns), structure of arrays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct M4 {
+    /// First column.
+    pub x: V4,
+    /// Second column.
+    pub y: V4,
+    /// Third column.
+    pub z: V4,
+}
+
+impl M4 {
+    /// Set lane `l`.
+    #[inline]
+    pub fn set(&mut self, l: usize, m: &Mat3) {
+        self.x.set(l, m.x);
+        self.y.set(l, m.y);
+        self.z.set(l, m.z);
+    }
+
+    /// `M v` per lane, as [`Mat3::mul_vec`]: `x v.x + y v.y + z v.z`.
+    #[inline]
+    pub fn mul_vec(&self, v: &V4) -> V4 {
+        let a = self.x.scale(v.x);
+        let b = self.y.scale(v.y);
+        let c = self.z.scale(v.z);
+        a.add(&b).add(&c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each lane gives the scalar operation's exact bits.
+    #[test]
+    fn lanes_match_the_scalar_operations() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        for _ in 0..1000 {
+            let a: [Vec3; 4] = core::array::from_fn(|_| rng.unit_vector() * rng.range(-5.0, 5.0));
+            let b: [Vec3; 4] = core::array::from_fn(|_| rng.unit_vector() * rng.range(-5.0, 5.0));
+            let m: [Mat3; 4] = core::array::from_fn(|_| Mat3::from_quat(rng.rotation()));
+            let mut va = V4::default();
+            let mut vb = V4::default();
+            let mut mm = M4::default();
+            for l in 0..4 {
+                va.set(l, a[l]);
+                vb.set(l, b[l]);
+                mm.set(l, &m[l]);
+            }
+            let dot = va.dot(&vb);
+            let mv = mm.mul_vec(&va);
+            let s = dot.sqrt();
+            for l in 0..4 {
+                assert_eq!(dot.lane(l).to_bits(), a[l].dot(b[l]).to_bits());
+                assert_eq!(mv.lane(l), m[l].mul_vec(a[l]));
+                assert_eq!(s.lane(l).to_bits(), scalar::sqrt(a[l].dot(b[l])).to_bits());
+            }
+        }
+    }
+}
