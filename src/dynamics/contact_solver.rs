@@ -144,6 +144,18 @@ pub(crate) struct Softness {
 }
 
 impl Softness {
+    /// The step's two contact softnesses: `[dynamic–dynamic, against a static or
+    /// kinematic body]` (twice the stiffness), the stiffness capped at a quarter of the
+    /// sub-step rate.
+    pub fn for_contacts(cfg: &WorldConfig) -> [Softness; 2] {
+        let h = cfg.substep();
+        let hertz = scalar::min(cfg.contact_hertz, 0.25 / h);
+        [
+            Softness::new(hertz, cfg.contact_damping_ratio, h),
+            Softness::new(2.0 * hertz, cfg.contact_damping_ratio, h),
+        ]
+    }
+
     /// The coefficients of a spring of `hertz` with damping ratio `zeta`, sub-step `h`.
     pub fn new(hertz: f32, zeta: f32, h: f32) -> Softness {
         if hertz <= 0.0 {
@@ -201,7 +213,9 @@ pub(crate) struct ConstraintPoint {
     /// Sum of the normal impulses applied this step (N·s): zero when the point never
     /// pushed (a speculative point that was not reached).
     pub total_impulse: f32,
-    /// Normal speed `v_n` at prepare, before this step's gravity (m/s).
+    /// Normal speed `v_n` at prepare, before this step's gravity (m/s); the solve lowers
+    /// it to the closing speed the point had when it first pushed (the impact speed,
+    /// with the gravity of the sub-steps before it).
     pub normal_speed0: f32,
     /// Bounced by the collision pass before the sub-steps.
     pub bounced: bool,
@@ -340,12 +354,14 @@ fn inverse_or_zero(k: f32) -> f32 {
 
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
 /// sensor, no point, or no moving dynamic body.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn prepare<const N: usize>(
     c: &Contact,
     index: u32,
     bodies: &Pool<Body<'_>, N>,
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
+    softness: &[Softness; 2],
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
@@ -364,13 +380,10 @@ pub(crate) fn prepare<const N: usize>(
     if m_a <= 0.0 && m_b <= 0.0 {
         return false;
     }
-    let h = cfg.substep();
     let n = c.normal;
     let t1 = n.any_perpendicular();
     let t2 = n.cross(t1);
     let rigid_partner = body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic;
-    let hertz = scalar::min(cfg.contact_hertz, 0.25 / h);
-    let hertz = if rigid_partner { 2.0 * hertz } else { hertz };
     let center_a = body_a.world_center();
     let center_b = body_b.world_center();
     let rot_a = sa.map(|s| s.rot);
@@ -391,7 +404,11 @@ pub(crate) fn prepare<const N: usize>(
         tangents: [t1, t2],
         friction: [m.static_friction, m.kinetic_friction],
         restitution: m.restitution,
-        softness: Softness::new(hertz, cfg.contact_damping_ratio, h),
+        softness: if rigid_partner {
+            softness[1]
+        } else {
+            softness[0]
+        },
         radius_sum: rho_a + rho_b,
         ..ContactConstraint::default()
     };
@@ -555,16 +572,22 @@ fn prepare_angular_rows(
     rolling: f32,
     twist: f32,
 ) {
-    let lever = match (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0) {
-        (true, true) => scalar::min(r_a.length(), r_b.length()),
-        (true, false) => r_a.length(),
-        _ => r_b.length(),
-    };
-    k.rolling = if k.len <= 2 { rolling * lever } else { 0.0 };
-    k.twist = if k.len == 1 { twist * lever } else { 0.0 };
+    let rolls = k.len <= 2 && rolling > 0.0;
+    let twists = k.len == 1 && twist > 0.0;
+    if rolls || twists {
+        let lever = match (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0) {
+            (true, true) => scalar::min(r_a.length(), r_b.length()),
+            (true, false) => r_a.length(),
+            _ => r_b.length(),
+        };
+        k.rolling = if rolls { rolling * lever } else { 0.0 };
+        k.twist = if twists { twist * lever } else { 0.0 };
+    }
     let [t1, t2] = k.tangents;
     let axes = [t1, t2, k.normal];
-    for (i, d) in axes.iter().enumerate() {
+    // The tangent rows only when the manifold rolls; the twist row always (the patch).
+    let first = if k.rolling > 0.0 { 0 } else { 2 };
+    for (i, d) in axes.iter().enumerate().skip(first) {
         let ia = i_a.mul_vec(*d);
         let ib = i_b.mul_vec(*d);
         if let (Some(x), Some(y), Some(m)) = (
@@ -752,9 +775,12 @@ pub(crate) fn bounce_constraint(
 
 /// The restitution pass after the sub-steps (Box2D v3's `b2ApplyRestitution`) for one
 /// constraint, for the points the collision pass left alone: a point that closed faster
-/// than the threshold at prepare (`v_n0 < −threshold`) and pushed during the sub-steps
-/// (a speculative point far away at the start of the step, stopped at the surface by its
-/// row) gets `λ = −m_n (v_n + e v_n0)`, `≥ 0`, in a pass of its own (not warm-started).
+/// than the threshold when it hit (`v_n0 < −threshold`, the closing speed when it first
+/// pushed) during the sub-steps (a speculative point far away at the start of the step,
+/// stopped at the surface by its row) gets `λ = −m_n (v_n + e v_n0)`, `≥ 0`, in a pass of
+/// its own (not warm-started). *Departure from Box2D*, which takes `v_n0` at prepare: a
+/// ball that falls for part of the step before it hits would bounce with the speed it
+/// had at the step's start, losing `g · Δt` (2 % per bounce from 10 m).
 pub(crate) fn restitution(k: &ContactConstraint, bodies: &mut [SolverBody], cfg: &WorldConfig) {
     let mut pair = Pair::load(k, bodies);
     let mut any = false;

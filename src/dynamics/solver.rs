@@ -259,6 +259,7 @@ fn plan<const N: usize, const C: usize>(
     let mut lane = 0usize;
     let mut last: Option<u32> = None;
     let mut k = ContactConstraint::default();
+    let softness = contact_solver::Softness::for_contacts(cfg);
     for &(key, ci) in scratch.iter() {
         let colour = key >> 24;
         if let Some(c) = last {
@@ -274,7 +275,8 @@ fn plan<const N: usize, const C: usize>(
         let Some(c) = contacts.get(ci as usize) else {
             continue;
         };
-        if contact_solver::prepare(c, ci, bodies, &solver.bodies, &solver.index, cfg, &mut k) {
+        let (sb, si) = (&solver.bodies, &solver.index);
+        if contact_solver::prepare(c, ci, bodies, sb, si, &softness, cfg, &mut k) {
             if let Some(mut g) = store.group(group) {
                 g.store_lane(lane, &k);
             }

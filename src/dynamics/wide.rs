@@ -33,7 +33,7 @@ use super::contact_solver::{ConstraintPoint, ContactConstraint, Softness};
 use super::solver::{SolverBody, NONE};
 use crate::config::WorldConfig;
 use crate::math::lanes::{F4, M4, V4};
-use crate::math::{Mat3, Vec3};
+use crate::math::Vec3;
 
 /// Colours of the constraint graph, overflow excluded (Box2D uses 24; a body rarely has
 /// more than a dozen contacts with other dynamic bodies).
@@ -516,24 +516,45 @@ struct Bodies4 {
 
 impl Bodies4 {
     fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
-        let mut g = Bodies4 {
-            v: V4::default(),
-            w: V4::default(),
-            dp: V4::default(),
-            rot: M4::default(),
-        };
+        // Plain arrays first, lanes second: the loads stay contiguous per body.
+        let mut f = [[0.0f32; 4]; 18];
         for (l, i) in idx.iter().enumerate() {
-            match bodies.get(*i as usize) {
-                Some(b) => {
-                    g.v.set(l, b.v);
-                    g.w.set(l, b.w);
-                    g.dp.set(l, b.dp);
-                    g.rot.set(l, &b.rot);
+            let Some(b) = bodies.get(*i as usize) else {
+                // No solver body: at rest, identity rotation.
+                for (r, d) in [(9usize, 0usize), (13, 1), (17, 2)] {
+                    let _ = d;
+                    if let Some(x) = f.get_mut(r).and_then(|c| c.get_mut(l)) {
+                        *x = 1.0;
+                    }
                 }
-                None => g.rot.set(l, &Mat3::IDENTITY),
+                continue;
+            };
+            let m = &b.rot;
+            let vals = [
+                b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z, b.dp.x, b.dp.y, b.dp.z, m.x.x, m.x.y,
+                m.x.z, m.y.x, m.y.y, m.y.z, m.z.x, m.z.y, m.z.z,
+            ];
+            for (row, v) in f.iter_mut().zip(vals) {
+                if let Some(x) = row.get_mut(l) {
+                    *x = v;
+                }
             }
         }
-        g
+        let v3 = |i: usize| V4 {
+            x: F4(f.get(i).copied().unwrap_or_default()),
+            y: F4(f.get(i + 1).copied().unwrap_or_default()),
+            z: F4(f.get(i + 2).copied().unwrap_or_default()),
+        };
+        Bodies4 {
+            v: v3(0),
+            w: v3(3),
+            dp: v3(6),
+            rot: M4 {
+                x: v3(9),
+                y: v3(12),
+                z: v3(15),
+            },
+        }
     }
 
     fn scatter(&self, bodies: &mut [SolverBody], idx: &[u32; 4], active: [bool; 4]) {
@@ -741,6 +762,16 @@ fn solve_group(
         b.w.add_scaled(&p.in_b, delta);
         total += new;
         levers += new * p.twist_arm;
+        // The speed at impact, for restitution: the closing speed the point had when it
+        // first pushed this step (it includes the gravity of the sub-steps before).
+        for l in 0..4 {
+            let first = mask.get(l).copied().unwrap_or(false)
+                && p.total_impulse.lane(l) == 0.0
+                && delta.lane(l) > 0.0;
+            if first && vn.lane(l) < p.normal_speed0.lane(l) {
+                p.normal_speed0.set(l, vn.lane(l));
+            }
+        }
         p.normal_impulse = new;
         p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         p.separation = p.separation.select_where(mask, s);

@@ -9,7 +9,9 @@
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-use super::{scalar, Mat3, Vec3};
+#[cfg(test)]
+use super::Mat3;
+use super::{scalar, Vec3};
 
 /// Four `f32` lanes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -248,6 +250,7 @@ pub(crate) struct M4 {
 
 impl M4 {
     /// Set lane `l`.
+    #[cfg(test)]
     #[inline]
     pub fn set(&mut self, l: usize, m: &Mat3) {
         self.x.set(l, m.x);
