@@ -33,6 +33,15 @@
 #![deny(missing_docs)]
 #![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
 
+// x87 floating point (32-bit x86 without SSE2, such as i586) rounds intermediates to 80
+// bits: every golden checksum differs there. Refuse to build rather than give other bits.
+#[cfg(all(target_arch = "x86", not(target_feature = "sse2")))]
+compile_error!(
+    "carom needs IEEE single-precision arithmetic: x87 floating point (x86 without SSE2, \
+     e.g. i586 targets) would give other bits than every other target; build for a target \
+     with SSE2 (i686) instead"
+);
+
 // Tests use std; so does the code `arbitrary`'s derive generates (a host-only feature).
 #[cfg(any(test, feature = "arbitrary"))]
 extern crate std;

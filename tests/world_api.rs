@@ -269,3 +269,68 @@ fn free_fall_matches_the_integrator_exactly() {
     let m = 1000.0 * 4.0 / 3.0 * core::f32::consts::PI * 0.125;
     assert!((b.mass() - m).abs() / m < 1e-5);
 }
+
+/// Shapes built from their public fields go through the same checks as their
+/// constructors at `World::add`: NaN, negative, zero, too small or too large sizes and
+/// unnormalised half-space normals are refused with the constructor's error, and the
+/// world is unchanged.
+#[test]
+fn shapes_from_public_fields_are_checked_at_add() {
+    use carom::shape::{Capsule, Cuboid, HalfSpace, Sphere, Triangle};
+    let mut w = small_world();
+    let before = w.checksum();
+    let bad = [
+        Shape::Sphere(Sphere { radius: f32::NAN }),
+        Shape::Sphere(Sphere { radius: -1.0 }),
+        Shape::Sphere(Sphere { radius: 5000.0 }),
+        Shape::Sphere(Sphere { radius: 1.0e-7 }),
+        Shape::Capsule(Capsule {
+            half_height: f32::INFINITY,
+            radius: 0.5,
+        }),
+        Shape::Capsule(Capsule {
+            half_height: 0.5,
+            radius: 0.0,
+        }),
+        Shape::Cuboid(Cuboid {
+            half_extents: Vec3::new(1.0, -1.0, 1.0),
+        }),
+        Shape::HalfSpace(HalfSpace {
+            normal: Vec3::new(0.0, 2.0, 0.0),
+        }),
+        Shape::Triangle(Triangle {
+            vertices: [Vec3::ZERO, Vec3::X, Vec3::X * 2.0],
+        }),
+    ];
+    for shape in bad {
+        let fixed = matches!(shape, Shape::HalfSpace(_) | Shape::Triangle(_));
+        let desc = if fixed {
+            BodyDesc::fixed(shape)
+        } else {
+            BodyDesc::dynamic(shape)
+        };
+        assert!(w.add(desc).is_err(), "{shape:?} was accepted");
+        assert_eq!(w.checksum(), before);
+    }
+    // A valid one written by hand is accepted.
+    assert!(w
+        .add(BodyDesc::dynamic(Shape::Sphere(Sphere { radius: 0.5 })).position(Vec3::Y * 3.0))
+        .is_ok());
+}
+
+/// A 100 m ball of water (inside the size range) has an inertia whose determinant is
+/// beyond `f32`; its mass properties are still derived (the inverse is taken scaled).
+#[test]
+fn a_100_m_ball_of_water_is_accepted() {
+    let mut w = small_world();
+    let h = w
+        .add(BodyDesc::dynamic(Shape::sphere(100.0).unwrap()).position(Vec3::Y * 200.0))
+        .unwrap();
+    let m = w.body(h).unwrap().mass();
+    let want = 1000.0 * 4.0 / 3.0 * core::f32::consts::PI * 1.0e6;
+    assert!((m - want).abs() / want < 1e-5, "{m} vs {want}");
+    for _ in 0..10 {
+        w.step();
+    }
+    assert!(w.body(h).unwrap().position().is_finite());
+}

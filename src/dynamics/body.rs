@@ -300,6 +300,31 @@ pub(crate) struct Body<'a> {
     pub moved: bool,
 }
 
+/// A shape built from its public fields must satisfy what its constructor checks: the
+/// constructor is run again on the fields (`World::add` and snapshot restore both come
+/// through here). A half-space's normal must already be unit length (to 1e-3 in `|n|²`).
+pub(crate) fn check_shape(shape: &Shape<'_>) -> Result<(), Error> {
+    use crate::shape::{Capsule, Cuboid, HalfSpace, Sphere, Triangle};
+    match shape {
+        Shape::Sphere(s) => Sphere::new(s.radius).map(|_| ()),
+        Shape::Capsule(c) => Capsule::new(c.half_height, c.radius).map(|_| ()),
+        Shape::Cuboid(c) => Cuboid::new(c.half_extents).map(|_| ()),
+        Shape::HalfSpace(h) => {
+            HalfSpace::new(h.normal)?;
+            if scalar::abs(h.normal.length_squared() - 1.0) > 1.0e-3 {
+                return Err(Error::NotUnit(Input::Direction));
+            }
+            Ok(())
+        }
+        Shape::Triangle(t) => {
+            let [a, b, c] = t.vertices;
+            Triangle::new(a, b, c).map(|_| ())
+        }
+        // Hulls can only come from `ConvexHull::new`, which validated them.
+        Shape::Hull(_) => Ok(()),
+    }
+}
+
 impl<'a> Body<'a> {
     /// Validate a description and derive mass properties.
     pub fn from_desc(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
@@ -311,6 +336,7 @@ impl<'a> Body<'a> {
     /// bodies may have travelled beyond it). The position must still be finite.
     pub fn from_desc_anywhere(d: &BodyDesc<'a>) -> Result<Body<'a>, Error> {
         finite_vec(d.pose.position, Input::Position)?;
+        check_shape(&d.shape)?;
         if !d.pose.rotation.is_finite() {
             return Err(Error::NonFinite(Input::Rotation));
         }
