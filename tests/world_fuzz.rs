@@ -645,3 +645,46 @@ fn finding_huge_coordinates_are_refused() {
         assert!(w.set_pose(ground, edge).is_ok());
     });
 }
+
+/// Was (fuzz `snapshot`, input `AQgAgBQBVlVVXWyHQgClAAE=`, CI red on main): a real
+/// snapshot with −3.4e38 written over a field and the hash recomputed was accepted, and
+/// the world went non-finite one step later. Mass properties are now derived on restore,
+/// every other number is bounded, and the solver bounds what it warm-starts with. This
+/// writes each special float over every 4-byte window of the fixture's snapshot (after
+/// 20 steps, its contacts warm) with the hash resealed: restore either refuses (world unchanged) or the
+/// world steps finite, the original input included.
+#[test]
+fn finding_any_resealed_special_float_restores_finite() {
+    with_stack(|| {
+        let original = SnapshotEdit::Word {
+            at: 4_360_044,
+            bits: (-3.4e38f32).to_bits(),
+        };
+        if let Err(v) = snapshot_edit_properties(20, &[original], true) {
+            panic!("the original finding: {v:?}");
+        }
+        // NaN (refused as such), the extremes, a subnormal (it found a division by a
+        // subnormal weight), a negative: one of each kind.
+        let specials = [f32::NAN, -3.4e38, 1.0e30, 1.0e-40, -1.0];
+        let hull = fixture_hull().unwrap();
+        for steps in [20u8] {
+            let mut w = snapshot_fixture(&hull).unwrap();
+            for _ in 0..steps {
+                w.step();
+            }
+            let mut buf = vec![0u8; SNAPSHOT_BUFFER];
+            let n = w.snapshot(&mut buf).unwrap() as u32;
+            for at in 36..n.saturating_sub(3) {
+                for x in specials {
+                    let edit = SnapshotEdit::Word {
+                        at,
+                        bits: x.to_bits(),
+                    };
+                    if let Err(v) = snapshot_edit_properties(steps, &[edit], true) {
+                        panic!("steps {steps}, {x} at byte {at}: {v:?}");
+                    }
+                }
+            }
+        }
+    });
+}

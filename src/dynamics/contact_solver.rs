@@ -417,10 +417,10 @@ pub(crate) fn prepare<const N: usize>(
     // impulse, however it came to be (a crafted snapshot included), can send a body to a
     // non-finite speed.
     let speed_bound = 2.0 * cfg.max_linear_speed + cfg.max_push_speed;
-    let mut weight = 0.0f32;
-    let mut weighted = Vec3::ZERO;
     let mut plain = Vec3::ZERO;
     let mut carried = 0.0f32;
+    let mut largest = 0.0f32;
+    let mut mids = [Vec3::ZERO; 4];
     for (dst, p) in k.points.iter_mut().zip(c.points()) {
         let p_a = body_a.pose.transform_point(p.local_a);
         let p_b = body_b.pose.transform_point(p.local_b);
@@ -457,14 +457,26 @@ pub(crate) fn prepare<const N: usize>(
             bounced: false,
         };
         let mid = (p_a + p_b) * 0.5;
-        weighted += mid * normal_impulse;
-        weight += normal_impulse;
+        if let Some(m) = mids.get_mut(usize::from(k.len)) {
+            *m = mid;
+        }
         plain += mid;
         carried += normal_impulse;
+        largest = scalar::max(largest, normal_impulse);
         k.len += 1;
     }
     let count = f32::from(k.len);
-    let center = if weight > 0.0 {
+    // The points' mean weighted by last step's normal impulses, each relative to the
+    // largest (so the weights lie in [0, 1] and sum to at least 1 whatever the impulses'
+    // scale: subnormal impulses cannot divide by zero).
+    let center = if largest > 0.0 {
+        let mut weighted = Vec3::ZERO;
+        let mut weight = 0.0f32;
+        for (p, mid) in k.points.iter().zip(mids).take(usize::from(k.len)) {
+            let w = p.normal_impulse / largest;
+            weighted += mid * w;
+            weight += w;
+        }
         weighted * (1.0 / weight)
     } else {
         plain * (1.0 / count)
