@@ -33,6 +33,10 @@ pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: u
     pub(crate) islands: [u32; BODIES],
     pub(crate) step_count: u64,
     pub(crate) report: StepReport,
+    /// Every non-static body sleeps and nothing moved at the end of the last step, and no
+    /// call changed anything since: the next step would change nothing but the step
+    /// count, so it does only that. Derived state (false after a restore).
+    pub(crate) quiet: bool,
 }
 
 impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize> Default
@@ -69,6 +73,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
                 dropped_contacts: 0,
                 dropped_events: 0,
             },
+            quiet: false,
         }
     }
 
@@ -89,6 +94,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     pub fn set_config(&mut self, config: WorldConfig) -> Result<(), Error> {
         config.validate()?;
         self.config = config;
+        self.quiet = false;
         Ok(())
     }
 
@@ -102,6 +108,9 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     ///
     /// The pipeline, one call per stage (DESIGN.md, "One fixed step"):
     pub fn step_traced(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
+        if self.quiet {
+            return self.quiet_step(trace);
+        }
         let cfg = self.config;
         let mut report = StepReport::default();
         self.events.clear();
@@ -132,6 +141,45 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         // 10 sleep: islands fall asleep and wake together
         report.awake_bodies =
             sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg);
+        self.step_count = self.step_count.wrapping_add(1);
+        self.trace(&mut trace, Stage::Sleep);
+        self.report = report;
+        self.quiet = report.awake_bodies == 0
+            && !self
+                .bodies
+                .iter()
+                .any(|(_, b)| b.moved || (b.kind == BodyKind::Kinematic && b.awake));
+        report
+    }
+
+    /// A step of a world at rest (see `quiet`): every stage would leave the state as it
+    /// is, so only the step count moves; the report and the trace are what the full step
+    /// would give.
+    fn quiet_step(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
+        self.events.clear();
+        // The broad phase would find no new pair (nothing moved).
+        self.pairs.clear();
+        // The solver's gather: every pose is the step's start pose, forces are spent.
+        for (_, b) in self.bodies.iter_mut() {
+            b.pose0 = b.pose;
+            b.force = Vec3::ZERO;
+            b.torque = Vec3::ZERO;
+        }
+        let report = StepReport {
+            awake_bodies: 0,
+            contacts: self.report.contacts,
+            points: self.report.points,
+            ..StepReport::default()
+        };
+        for stage in [
+            Stage::BroadPhase,
+            Stage::NarrowPhase,
+            Stage::Solve,
+            Stage::Continuous,
+            Stage::Projection,
+        ] {
+            self.trace(&mut trace, stage);
+        }
         self.step_count = self.step_count.wrapping_add(1);
         self.trace(&mut trace, Stage::Sleep);
         self.report = report;
@@ -173,6 +221,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// `PoolFull(Bodies)`; the world is unchanged on error.
     pub fn add(&mut self, desc: BodyDesc<'a>) -> Result<BodyHandle, Error> {
         let body = Body::from_desc(&desc)?;
+        self.quiet = false;
         self.bodies
             .insert(body)
             .ok_or(Error::PoolFull(PoolKind::Bodies))
@@ -182,6 +231,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// so nothing stays asleep in the air.
     pub fn remove(&mut self, h: BodyHandle) -> Result<(), Error> {
         self.bodies.get(h).ok_or(Error::StaleHandle)?;
+        self.quiet = false;
         self.wake_touching(h.index);
         self.bodies.remove(h).ok_or(Error::StaleHandle)?;
         self.contacts.retain(|c| c.a != h.index && c.b != h.index);
@@ -220,6 +270,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 
     fn body_mut(&mut self, h: BodyHandle) -> Result<&mut Body<'a>, Error> {
+        self.quiet = false;
         self.bodies.get_mut(h).ok_or(Error::StaleHandle)
     }
 
@@ -340,10 +391,20 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         Ok(())
     }
 
-    /// Change a body's material (validated).
+    /// Change a body's material (validated); its contacts combine it from the next step.
     pub fn set_material(&mut self, h: BodyHandle, m: Material) -> Result<(), Error> {
         m.validate()?;
         self.body_mut(h)?.material = m;
+        // Contacts keep the combined material of their pair: combine it again.
+        let bodies = &self.bodies;
+        for c in self.contacts.iter_mut() {
+            if c.a != h.index && c.b != h.index {
+                continue;
+            }
+            if let (Some(x), Some(y)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) {
+                c.material = Material::combine(&x.material, &y.material);
+            }
+        }
         Ok(())
     }
 }

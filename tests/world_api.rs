@@ -334,3 +334,70 @@ fn a_100_m_ball_of_water_is_accepted() {
     }
     assert!(w.body(h).unwrap().position().is_finite());
 }
+
+/// A material set on a body already in contact takes effect at the next step: a box
+/// sliding at 3 m/s on ice that turns rough stops after `v²/(2 μ_k g)`, and one that
+/// stays on ice keeps its speed.
+#[test]
+fn a_new_material_reaches_existing_contacts() {
+    let slide = |mu_after: f32| -> f32 {
+        let mut w = W::new();
+        w.add(
+            BodyDesc::fixed(Shape::cuboid(Vec3::new(50.0, 0.5, 5.0)).unwrap())
+                .position(Vec3::new(0.0, -0.5, 0.0)),
+        )
+        .unwrap();
+        let ice = Material {
+            static_friction: 0.0,
+            kinetic_friction: 0.0,
+            restitution: 0.0,
+            ..Material::DEFAULT
+        };
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::cuboid(Vec3::splat(0.25)).unwrap())
+                    .position(Vec3::new(-40.0, 0.25, 0.0))
+                    .material(ice),
+            )
+            .unwrap();
+        // The ground's friction is 1: the pair's friction is √(μ_box · 1) = √μ_box.
+        let handles: Vec<_> = w.handles().collect();
+        let rough = Material {
+            static_friction: 1.0,
+            kinetic_friction: 1.0,
+            restitution: 0.0,
+            ..Material::DEFAULT
+        };
+        w.set_material(handles[0], rough).unwrap();
+        for _ in 0..30 {
+            w.step();
+        }
+        w.set_linear_velocity(h, Vec3::new(3.0, 0.0, 0.0)).unwrap();
+        w.step();
+        assert!(w.pair_count() >= 1, "the box rests on the ground");
+        w.set_material(
+            h,
+            Material {
+                static_friction: mu_after,
+                kinetic_friction: mu_after,
+                ..ice
+            },
+        )
+        .unwrap();
+        let x0 = w.body(h).unwrap().position().x;
+        for _ in 0..120 {
+            w.step();
+        }
+        w.body(h).unwrap().position().x - x0
+    };
+    // Frictionless: 2 s at ~3 m/s.
+    let free = slide(0.0);
+    assert!((free - 6.0).abs() < 0.1, "frictionless slide {free} m");
+    // μ_box = 0.25, so μ = 0.5: stops after v²/(2 μ g) = 9 / 9.81 = 0.92 m.
+    let stopped = slide(0.25);
+    let d = 9.0 / (2.0 * 0.5 * 9.81);
+    assert!(
+        (stopped - d).abs() < 0.1,
+        "slide {stopped} m, analytic {d} m"
+    );
+}

@@ -760,6 +760,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             .map_err(Error::Snapshot)?;
         self.events.clear();
         self.pairs.clear();
+        self.quiet = false;
         Ok(())
     }
 
