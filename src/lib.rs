@@ -60,6 +60,7 @@ pub mod props;
 pub mod rng;
 pub mod scenes;
 pub mod shape;
+mod sort;
 mod world;
 
 pub use config::WorldConfig;

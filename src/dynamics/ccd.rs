@@ -108,7 +108,7 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
         }
     }
     // Unique entries: an unstable sort is deterministic.
-    scratch.sort_unstable();
+    crate::sort::sort_unstable(scratch);
     let tolerance = scalar::max(cfg.slop, MIN_TOLERANCE);
     let mut at = 0usize;
     for i in 0..bodies.high() {

@@ -273,7 +273,7 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let slots = contacts.as_mut_slice();
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
-        if read != write {
+        if read != write && read < slots.len() {
             slots.swap(read, write);
         }
         let Some(c) = slots.get_mut(write) else {

@@ -179,17 +179,16 @@ impl<T: Copy, const N: usize> Pool<T, N> {
 
     /// Iterate used slots in index order: `(index, &item)`.
     pub fn iter(&self) -> impl Iterator<Item = (usize, &T)> {
-        self.slots[..self.high as usize]
-            .iter()
+        let used = self.slots.get(..self.high as usize).unwrap_or(&[]);
+        used.iter()
             .enumerate()
             .filter_map(|(i, s)| s.as_ref().map(|t| (i, t)))
     }
 
     /// Iterate used slots in index order, mutably.
     pub fn iter_mut(&mut self) -> impl Iterator<Item = (usize, &mut T)> {
-        let high = self.high as usize;
-        self.slots[..high]
-            .iter_mut()
+        let used = self.slots.get_mut(..self.high as usize).unwrap_or(&mut []);
+        used.iter_mut()
             .enumerate()
             .filter_map(|(i, s)| s.as_mut().map(|t| (i, t)))
     }

@@ -240,11 +240,8 @@ fn insert_sorted(out: &mut [RayCastHit], len: usize, hit: RayCastHit) -> usize {
         return len;
     }
     let new_len = if len < out.len() { len + 1 } else { len };
-    if let Some(tail) = out.get_mut(at..new_len) {
-        tail.rotate_right(1);
-        if let Some(first) = tail.first_mut() {
-            *first = hit;
-        }
+    if let Some(tail) = out.get_mut(..new_len) {
+        crate::sort::insert_shifting(tail, at, hit);
     }
     new_len
 }

@@ -208,7 +208,7 @@ fn plan<const N: usize, const C: usize>(
         let _ = scratch.push((key, i as u32));
     }
     // Unique second components: an unstable sort is deterministic.
-    scratch.sort_unstable();
+    crate::sort::sort_unstable(scratch);
     for (rank, entry) in scratch.iter_mut().enumerate() {
         let Some(c) = contacts.get(entry.1 as usize) else {
             continue;
@@ -218,7 +218,7 @@ fn plan<const N: usize, const C: usize>(
         let colour = wide::colour(&mut solver.bodies, ia, ib);
         entry.0 = (colour << 24) | (rank as u32 & 0x00ff_ffff);
     }
-    scratch.sort_unstable();
+    crate::sort::sort_unstable(scratch);
     // Each colour's last partial group goes to the overflow colour (solved lane by lane,
     // packed four to a group): the store then needs at most one group beyond the
     // contacts themselves.
@@ -237,7 +237,7 @@ fn plan<const N: usize, const C: usize>(
         }
         at = end.max(at + 1);
     }
-    scratch.sort_unstable();
+    crate::sort::sort_unstable(scratch);
     // Groups: a new one every four lanes and at every change of colour.
     let mut groups = 0usize;
     let mut last: Option<(u32, usize)> = None;

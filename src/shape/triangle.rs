@@ -75,13 +75,13 @@ impl Triangle {
             if front { n } else { -n },
             FeatureId::face(if front { 0 } else { 1 }),
         );
-        for k in 0..3 {
-            let i = order[k] as u32;
-            let j = order[(k + 1) % 3] as u32;
+        for (k, &i) in order.iter().enumerate() {
+            let j = order[(k + 1) % 3];
+            let v = self.vertices[i.min(2)];
             f.push(
-                self.vertices[i as usize],
-                FeatureId::vertex(i),
-                FeatureId::edge(i, j),
+                v,
+                FeatureId::vertex(i as u32),
+                FeatureId::edge(i as u32, j as u32),
             );
         }
         f

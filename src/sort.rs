@@ -1,0 +1,136 @@
+//! In-place sorting without a panic path.
+//!
+//! `core`'s `sort_unstable` carries panic paths (an order-violation check and bounds
+//! checks the optimiser keeps), which the panic-never firmware check refuses. This is a
+//! heapsort: O(n log n) compares in every case, no allocation, no recursion, and every
+//! access checked by `get`. It is not stable, but it is deterministic: the output depends
+//! only on the input order and the comparison, so equal keys land in the same order on
+//! every target. The pipeline sorts unique keys, where stability does not matter.
+
+/// Sort `v` ascending.
+pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
+    sort_unstable_by(v, |a, b| a < b);
+}
+
+/// Sort `v` so that no element is `less` than the one before it. `less` must be a strict
+/// weak order; if it is not, the result is some permutation of `v` (never a panic).
+pub(crate) fn sort_unstable_by<T>(v: &mut [T], less: impl Fn(&T, &T) -> bool) {
+    let n = v.len();
+    // Build a max-heap: every parent at least as large as its children.
+    let mut i = n / 2;
+    while i > 0 {
+        i -= 1;
+        sift_down(v, i, n, &less);
+    }
+    // Move the largest to the end, one at a time.
+    let mut end = n;
+    while end > 1 {
+        end -= 1;
+        swap(v, 0, end);
+        sift_down(v, 0, end, &less);
+    }
+}
+
+/// Restore the heap order below `root` within `v[..end]`.
+fn sift_down<T>(v: &mut [T], mut root: usize, end: usize, less: &impl Fn(&T, &T) -> bool) {
+    // Each pass at least doubles `root`: at most `usize::BITS` passes.
+    for _ in 0..usize::BITS {
+        let left = root.saturating_mul(2).saturating_add(1);
+        if left >= end {
+            return;
+        }
+        let right = left + 1;
+        let child = if right < end && is_less(v, left, right, less) {
+            right
+        } else {
+            left
+        };
+        if !is_less(v, root, child, less) {
+            return;
+        }
+        swap(v, root, child);
+        root = child;
+    }
+}
+
+/// `v[a] < v[b]`; false if either index is out of range.
+fn is_less<T>(v: &[T], a: usize, b: usize, less: &impl Fn(&T, &T) -> bool) -> bool {
+    match (v.get(a), v.get(b)) {
+        (Some(x), Some(y)) => less(x, y),
+        _ => false,
+    }
+}
+
+/// Swap `v[a]` and `v[b]`; nothing if either index is out of range.
+fn swap<T>(v: &mut [T], a: usize, b: usize) {
+    if a < v.len() && b < v.len() {
+        v.swap(a, b);
+    }
+}
+
+/// Move `v[at..]` one place to the right (the last element falls off) and put `x` at
+/// `at`; nothing if `at` is out of range. The sorted-insert step of small lists.
+pub(crate) fn insert_shifting<T: Copy>(v: &mut [T], at: usize, x: T) {
+    if at >= v.len() {
+        return;
+    }
+    let mut i = v.len() - 1;
+    while i > at {
+        let prev = v.get(i - 1).copied();
+        if let (Some(p), Some(slot)) = (prev, v.get_mut(i)) {
+            *slot = p;
+        }
+        i -= 1;
+    }
+    if let Some(slot) = v.get_mut(at) {
+        *slot = x;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    #[test]
+    fn sorts_like_core_on_random_and_adversarial_inputs() {
+        let mut rng = SplitMix64::new(7);
+        for n in [0usize, 1, 2, 3, 7, 16, 100, 1000] {
+            for pattern in 0..4 {
+                let mut v: std::vec::Vec<(u32, u32)> = (0..n)
+                    .map(|i| match pattern {
+                        0 => ((rng.next_u64() % 50) as u32, i as u32),
+                        1 => (i as u32, 0),
+                        2 => ((n - i) as u32, 0),
+                        _ => (7, i as u32),
+                    })
+                    .collect();
+                let mut want = v.clone();
+                want.sort_unstable();
+                sort_unstable(&mut v);
+                assert_eq!(v, want, "n {n} pattern {pattern}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_broken_order_permutes_and_does_not_panic() {
+        let mut v: std::vec::Vec<u32> = (0..200).collect();
+        // Not a strict weak order: "less" whenever the two differ.
+        sort_unstable_by(&mut v, |a, b| a != b);
+        let mut back = v.clone();
+        back.sort_unstable();
+        assert_eq!(back, (0..200).collect::<std::vec::Vec<u32>>());
+    }
+
+    #[test]
+    fn insert_shifting_drops_the_last() {
+        let mut v = [1, 2, 4, 5];
+        insert_shifting(&mut v, 2, 3);
+        assert_eq!(v, [1, 2, 3, 4]);
+        insert_shifting(&mut v, 4, 9);
+        assert_eq!(v, [1, 2, 3, 4]);
+        insert_shifting(&mut v, 0, 0);
+        assert_eq!(v, [0, 1, 2, 3]);
+    }
+}
