@@ -123,7 +123,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.trace(&mut trace, Stage::Solve);
         // 8 continuous collision: time of impact for fast bodies
         let (bodies, contacts, pairs) = (&mut self.bodies, &self.contacts, &mut self.pairs);
-        ccd::sweep_fast_bodies(bodies, contacts, pairs, &cfg, cfg.dt, &mut report);
+        let broad = &self.broad;
+        ccd::sweep_fast_bodies(bodies, broad, contacts, pairs, &cfg, cfg.dt, &mut report);
         self.trace(&mut trace, Stage::Continuous);
         // 9 projection: bounded push-out of the deep penetration that remains
         projection::project(&mut self.solver, &mut self.bodies, &cfg);
@@ -184,7 +185,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.wake_touching(h.index);
         self.bodies.remove(h).ok_or(Error::StaleHandle)?;
         self.contacts.retain(|c| c.a != h.index && c.b != h.index);
-        self.broad.order.retain(|s| *s != h.index);
+        self.broad.remove_body(h.index);
         Ok(())
     }
 
