@@ -51,7 +51,7 @@ use heapless::Vec as HVec;
 
 use super::aabb_tree::{AabbTree, NULL};
 use super::body::{Body, BodyKind};
-use super::contact::{contains_pair, Contact};
+use super::contact::{Contact, PairIndex};
 use super::events::StepReport;
 use super::pool::Pool;
 use super::solver::clamp_length;
@@ -211,6 +211,10 @@ impl<const N: usize> BroadPhase<N> {
         if moved == 0 {
             return;
         }
+        // Some 8 lookups per moved body, each a binary search of about 16 probes, against
+        // one pass over the contacts and the slots.
+        let build = moved.saturating_mul(128) >= contacts.len().saturating_add(bodies.high());
+        let index: PairIndex<'_, N> = PairIndex::new(contacts, build);
         let mut kept = SmallestPairs::new(pairs);
         let mut retry = [false; N];
         for (i, body_i) in bodies.iter() {
@@ -235,7 +239,7 @@ impl<const N: usize> BroadPhase<N> {
                     } else {
                         (slot_j, slot_i)
                     };
-                    if contains_pair(contacts, pair) {
+                    if index.contains(pair) {
                         return;
                     }
                     if let Some((a, b)) = kept.offer(pair) {
