@@ -18,8 +18,8 @@ use crate::shape::Shape;
 /// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
 /// many candidate pairs per step) and `EVENTS` events per step.
 ///
-/// Everything lives inline: no heap. A world is large (roughly 300 bytes per body and
-/// 700 per contact): keep big ones in a `static` or a `Box`, or on a thread with a big
+/// Everything lives inline: no heap. A world is large (roughly 600 bytes per body and
+/// 1200 per contact): keep big ones in a `static` or a `Box`, or on a thread with a big
 /// stack.
 #[derive(Clone, Debug)]
 pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize = 256> {
