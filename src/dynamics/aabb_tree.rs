@@ -831,10 +831,10 @@ mod tests {
         tree.validate().unwrap();
     }
 
-    /// Boxes inserted along a line in order of size make the tree as tall as its stack
-    /// allows only with a tiny stack: with a stack of 2 the query falls back to the
-    /// linear scan, and with the height check defeated (a lying root height) the pushes
-    /// that do not fit scan their subtrees. Both answers are complete.
+    /// Queries with stacks too small for the tree: with a stack of 2 the height check
+    /// sends the query to the linear scan of the leaves, and with that check defeated (a
+    /// root that claims height 0) the pushes that do not fit scan their subtrees. Both
+    /// answers are complete, each leaf once.
     #[test]
     fn small_stack_falls_back_and_stays_complete() {
         const N: usize = 64;

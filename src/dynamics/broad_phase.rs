@@ -23,8 +23,20 @@
 //! all of them, a static or kinematic one only the dynamic ones (the only kind it may
 //! pair with, [`may_pair`]). A pair of two moved bodies is taken from the lower slot's
 //! query only. The pairs that may collide and have no contact yet are the new pairs,
-//! sorted by `(a, b)`. A step in which nothing moved out of its box does no tree work at
-//! all: a resting or sleeping world costs one box test per awake body.
+//! sorted by `(a, b)`; when many bodies moved, "no contact yet" is looked up in a
+//! per-body index of the contacts ([`PairIndex`]) rather than by binary search. A step in
+//! which nothing moved out of its box does no tree work at all: a resting or sleeping
+//! world costs one box test per awake body.
+//!
+//! One tree holds every kind of body, where Box2D v3 keeps one tree per body type: the
+//! category bits of the internal nodes (the union of their leaves') let a static or
+//! kinematic body's query skip the subtrees without a dynamic body, which is what a
+//! separate tree of movable bodies would give, and one tree of `N` leaves needs `2N`
+//! nodes where two trees, each of which may have to hold every body, would need `4N`.
+//!
+//! The tree's leaf of a body always holds `Body::fat` as of the body's last search:
+//! whatever replaces `fat` (stage 2, `World::set_pose`, `World::add`) also flags the
+//! body `moved`, and the search moves the leaf of every moved body before querying.
 //!
 //! Removing a body removes its leaf (`World::remove`). A snapshot does not store the
 //! tree: `restore` marks it stale, and the next step builds it again from the bodies'
