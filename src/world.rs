@@ -18,8 +18,8 @@ use crate::shape::Shape;
 /// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
 /// many candidate pairs per step) and `EVENTS` events per step.
 ///
-/// Everything lives inline: no heap. A world is large (roughly 300 bytes per body and
-/// 700 per contact): keep big ones in a `static` or a `Box`, or on a thread with a big
+/// Everything lives inline: no heap. A world is large (roughly 600 bytes per body and
+/// 1200 per contact): keep big ones in a `static` or a `Box`, or on a thread with a big
 /// stack.
 #[derive(Clone, Debug)]
 pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize = 256> {
@@ -133,7 +133,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.trace(&mut trace, Stage::Solve);
         // 8 continuous collision: time of impact for fast bodies
         let (bodies, contacts, pairs) = (&mut self.bodies, &self.contacts, &mut self.pairs);
-        ccd::sweep_fast_bodies(bodies, contacts, pairs, &cfg, cfg.dt, &mut report);
+        let broad = &self.broad;
+        ccd::sweep_fast_bodies(bodies, broad, contacts, pairs, &cfg, cfg.dt, &mut report);
         self.trace(&mut trace, Stage::Continuous);
         // 9 projection: bounded push-out of the deep penetration that remains
         projection::project(&mut self.solver, &self.contacts, &mut self.bodies, &cfg);
@@ -235,7 +236,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.wake_touching(h.index);
         self.bodies.remove(h).ok_or(Error::StaleHandle)?;
         self.contacts.retain(|c| c.a != h.index && c.b != h.index);
-        self.broad.order.retain(|s| *s != h.index);
+        self.broad.remove_body(h.index);
         Ok(())
     }
 

@@ -106,7 +106,7 @@ fn bad_buffers_are_refused_with_their_error_and_change_nothing() {
     bad[n - 3] ^= 0x40;
     check(&mut w, &bad, SnapshotError::Checksum);
     // Another capacity.
-    let mut other: World<'static, 161, 512> = World::new();
+    let mut other: Box<World<'static, 161, 512>> = Box::new(World::new());
     assert_eq!(
         other.restore(&buf),
         Err(Error::Snapshot(SnapshotError::Capacity))

@@ -15,20 +15,55 @@
 //!
 //! A contact lives as long as the enlarged boxes of its two bodies overlap
 //! (`contact::update_contacts` removes it once they do not), so only pairs with a moved
-//! body can be new. When some body moved, Baraff's sort-and-sweep ("Dynamic simulation
-//! of non-penetrating rigid bodies", 1992, ch. 7) on x over the enlarged boxes finds the
-//! overlapping pairs with a moved body that may collide and have no contact yet. The
-//! slots stay sorted by `(fat.min.x, slot)` from one step to the next, so an insertion
-//! sort repairs the order in close to linear time (temporal coherence). A step in which
-//! nothing moved out of its box does no search at all: a resting or sleeping world costs
-//! one box test per awake body.
+//! body can be new. The enlarged boxes are the leaves of a dynamic AABB tree
+//! ([`AabbTree`], Box2D v3's `b2DynamicTree`: insertion by the surface-area heuristic,
+//! rotations), one leaf per body, tagged with the body's kind. When some body moved,
+//! its leaf is inserted (a body that appeared) or moved to its new enlarged box, and
+//! then each moved body asks the tree for the boxes that overlap its own: a dynamic body
+//! all of them, a static or kinematic one only the dynamic ones (the only kind it may
+//! pair with, [`may_pair`]). A pair of two moved bodies is taken from the lower slot's
+//! query only. The pairs that may collide and have no contact yet are the new pairs,
+//! sorted by `(a, b)`; when many bodies moved, "no contact yet" is looked up in a
+//! per-body index of the contacts ([`PairIndex`]) rather than by binary search. A step in
+//! which nothing moved out of its box does no tree work at all: a resting or sleeping
+//! world costs one box test per awake body.
 //!
-//! Work is bounded: the sort and the sweep are at most `N²` comparisons each.
+//! One tree holds every kind of body, where Box2D v3 keeps one tree per body type: the
+//! category bits of the internal nodes (the union of their leaves') let a static or
+//! kinematic body's query skip the subtrees without a dynamic body, which is what a
+//! separate tree of movable bodies would give, and one tree of `N` leaves needs `2N`
+//! nodes where two trees, each of which may have to hold every body, would need `4N`.
+//!
+//! The tree's leaf of a body always holds `Body::fat` as of the body's last search:
+//! whatever replaces `fat` (stage 2, `World::set_pose`, `World::add`) also flags the
+//! body `moved`, and the search moves the leaf of every moved body before querying.
+//!
+//! Removing a body removes its leaf (`World::remove`). A snapshot does not store the
+//! tree: `restore` marks it stale, and the next step builds it again from the bodies'
+//! enlarged boxes in slot order ([`BroadPhase::invalidate`]).
+//!
+//! # Determinism
+//!
+//! The tree's shape depends on its history (the order of insertions and moves), and a
+//! restored world's tree is built in another order than the original's, so nothing the
+//! world computes may depend on the order a query visits the leaves. It does not: the
+//! new pairs are a set, sorted afterwards, and when the pair buffer is full the pairs
+//! kept are those with the smallest `(a, b)` keys, by a bounded max-heap over the
+//! buffer: a pair is kept exactly when fewer than `P` of all the new pairs have a smaller
+//! key, whatever the order they were found in. The others are counted in
+//! `StepReport::dropped_pairs` and their bodies stay flagged `moved`, so they are offered
+//! again next step. Continuous collision's query ([`BroadPhase::overlapping`]) sorts its
+//! answer by slot.
+//!
+//! Work is bounded: a tree operation is `O(height)`, a query `O(height + answer)` (a
+//! linear scan of the leaves if the tree is pathologically tall), and the heap `O(log P)`
+//! per pair that does not fit.
 
 use heapless::Vec as HVec;
 
+use super::aabb_tree::{AabbTree, NULL};
 use super::body::{Body, BodyKind};
-use super::contact::{contains_pair, Contact};
+use super::contact::{Contact, PairIndex};
 use super::events::StepReport;
 use super::pool::Pool;
 use super::solver::clamp_length;
@@ -36,28 +71,137 @@ use crate::collide::{movement_bounds, Motion};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Aabb};
 
-/// Sweep-and-prune state.
+/// Category bit of a static body's leaf.
+const STATIC: u8 = 0b001;
+/// Category bit of a kinematic body's leaf.
+const KINEMATIC: u8 = 0b010;
+/// Category bit of a dynamic body's leaf.
+const DYNAMIC: u8 = 0b100;
+/// Every category.
+const ANY: u8 = STATIC | KINEMATIC | DYNAMIC;
+
+/// The category of a body's leaf.
+fn category(kind: BodyKind) -> u8 {
+    match kind {
+        BodyKind::Static => STATIC,
+        BodyKind::Kinematic => KINEMATIC,
+        BodyKind::Dynamic => DYNAMIC,
+    }
+}
+
+/// The categories a body of `kind` may pair with: everything for a dynamic body, only
+/// dynamic bodies for the others ([`may_pair`]).
+fn partners(kind: BodyKind) -> u8 {
+    match kind {
+        BodyKind::Dynamic => ANY,
+        BodyKind::Static | BodyKind::Kinematic => DYNAMIC,
+    }
+}
+
+/// The broad phase: a dynamic AABB tree over the bodies' enlarged boxes.
 #[derive(Clone, Debug)]
 pub(crate) struct BroadPhase<const N: usize> {
-    /// Live slots sorted by `(fat.min.x, slot)`, as of the last search. Kept between
-    /// steps as the warm start of the insertion sort; it only speeds the sort up (the
-    /// pairs found do not depend on it).
-    pub order: HVec<u32, N>,
+    /// One leaf per body that has been through a search, with the body's enlarged box
+    /// and its kind's category; the user value is the slot.
+    tree: AabbTree<N>,
+    /// Per slot: the body's leaf in `tree`, or [`NULL`].
+    proxies: [u32; N],
+    /// The tree does not describe the bodies (a snapshot was restored): build it again
+    /// before using it.
+    stale: bool,
+    /// Tree operations (insertions, moves, removals, queries) so far: tests check that a
+    /// step in which nothing moved does none.
+    #[cfg(test)]
+    pub work: u32,
 }
 
 impl<const N: usize> BroadPhase<N> {
     /// Empty.
     pub const fn new() -> Self {
-        BroadPhase { order: HVec::new() }
+        BroadPhase {
+            tree: AabbTree::new(),
+            proxies: [NULL; N],
+            stale: false,
+            #[cfg(test)]
+            work: 0,
+        }
+    }
+
+    /// Forget the tree (the bodies were replaced, as by a restore): the next search
+    /// builds it again from the bodies' enlarged boxes, in slot order.
+    pub fn invalidate(&mut self) {
+        self.stale = true;
+    }
+
+    /// Drop the leaf of the body in `slot` (it is being removed).
+    pub fn remove_body(&mut self, slot: u32) {
+        let Some(p) = self.proxies.get_mut(slot as usize) else {
+            return;
+        };
+        if *p != NULL {
+            self.tree.remove(*p);
+            *p = NULL;
+            self.count_work();
+        }
+    }
+
+    #[inline]
+    fn count_work(&mut self) {
+        #[cfg(test)]
+        {
+            self.work = self.work.saturating_add(1);
+        }
+    }
+
+    /// Build the tree from scratch: one leaf per live body, in slot order.
+    fn rebuild(&mut self, bodies: &Pool<Body<'_>, N>) {
+        self.tree.clear();
+        self.proxies = [NULL; N];
+        for (slot, b) in bodies.iter() {
+            self.insert(slot, b);
+        }
+        self.stale = false;
+    }
+
+    fn insert(&mut self, slot: usize, b: &Body<'_>) {
+        let proxy = self.tree.insert(b.fat, slot as u32, category(b.kind));
+        if let Some(p) = self.proxies.get_mut(slot) {
+            // `None` cannot happen: one leaf per slot, at most `N`.
+            *p = proxy.unwrap_or(NULL);
+        }
+        self.count_work();
+    }
+
+    /// Make the leaf of the body in `slot` hold its current enlarged box and kind:
+    /// insert it if it has none, move it if its box changed.
+    fn sync(&mut self, slot: usize, b: &Body<'_>) {
+        let proxy = self.proxies.get(slot).copied().unwrap_or(NULL);
+        if proxy == NULL {
+            self.insert(slot, b);
+            return;
+        }
+        if self.tree.category(proxy) != Some(category(b.kind)) {
+            // Another body took the slot without a removal: start afresh.
+            self.tree.remove(proxy);
+            self.insert(slot, b);
+            return;
+        }
+        if self.tree.aabb(proxy) != Some(b.fat) {
+            if !self.tree.move_proxy(proxy, b.fat) {
+                self.insert(slot, b);
+            }
+            self.count_work();
+        }
     }
 
     /// Stage 3: the pairs `(lower slot, higher slot)` whose enlarged boxes overlap, with
     /// at least one body flagged `moved`, that may pair ([`may_pair`]) and have no
     /// contact in `contacts` yet, sorted by `(a, b)`. Clears the `moved` flags.
     ///
-    /// When `pairs` is full, the pairs found first in sweep order are kept; the rest are
-    /// counted in `report.dropped_pairs` and both bodies of each stay flagged, so the
-    /// search offers them again next step.
+    /// When there are more than `P` such pairs, the `P` with the smallest keys are kept
+    /// (whatever the tree's shape, module docs); the rest are counted in
+    /// `report.dropped_pairs` and both bodies of each stay flagged, so the search offers
+    /// them again next step.
     pub fn find_new_pairs<const P: usize>(
         &mut self,
         bodies: &mut Pool<Body<'_>, N>,
@@ -66,52 +210,62 @@ impl<const N: usize> BroadPhase<N> {
         report: &mut StepReport,
     ) {
         pairs.clear();
-        if !bodies.iter().any(|(_, b)| b.moved) {
-            return;
+        if self.stale {
+            self.rebuild(bodies);
         }
-        self.sync_with_pool(bodies);
-        self.sort_by_min_x(bodies);
-        let mut dropped: u32 = 0;
-        let mut retry = [false; N];
-        let order = self.order.as_slice();
-        for (i, &slot_i) in order.iter().enumerate() {
-            let Some(body_i) = bodies.at(slot_i as usize) else {
-                continue;
-            };
-            // The boxes after `i` in the order start at or after `body_i`'s start: stop at
-            // the first that starts beyond its end.
-            for &slot_j in order.get(i + 1..).unwrap_or(&[]) {
-                let Some(body_j) = bodies.at(slot_j as usize) else {
-                    continue;
-                };
-                if body_j.fat.min.x > body_i.fat.max.x {
-                    break;
-                }
-                if !(body_i.moved || body_j.moved)
-                    || !body_i.fat.overlaps(&body_j.fat)
-                    || !may_pair(body_i, body_j)
-                {
-                    continue;
-                }
-                let pair = if slot_i < slot_j {
-                    (slot_i, slot_j)
-                } else {
-                    (slot_j, slot_i)
-                };
-                if contains_pair(contacts, pair) {
-                    continue;
-                }
-                if pairs.push(pair).is_err() {
-                    dropped = dropped.saturating_add(1);
-                    for s in [slot_i, slot_j] {
-                        if let Some(r) = retry.get_mut(s as usize) {
-                            *r = true;
-                        }
-                    }
-                }
+        let mut moved = 0usize;
+        for (slot, b) in bodies.iter() {
+            if b.moved {
+                self.sync(slot, b);
+                moved += 1;
             }
         }
-        // Keys are unique (each unordered pair is visited once), so an unstable sort is
+        if moved == 0 {
+            return;
+        }
+        // Some 8 lookups per moved body, each a binary search of about 16 probes, against
+        // one pass over the contacts and the slots.
+        let build = moved.saturating_mul(128) >= contacts.len().saturating_add(bodies.high());
+        let index: PairIndex<'_, N> = PairIndex::new(contacts, build);
+        let mut kept = SmallestPairs::new(pairs);
+        let mut retry = [false; N];
+        for (i, body_i) in bodies.iter() {
+            if !body_i.moved {
+                continue;
+            }
+            let slot_i = i as u32;
+            self.tree
+                .query(&body_i.fat, partners(body_i.kind), |slot_j| {
+                    let Some(body_j) = bodies.at(slot_j as usize) else {
+                        return;
+                    };
+                    // A pair of two moved bodies comes from the lower slot's query.
+                    if slot_j == slot_i || (body_j.moved && slot_j < slot_i) {
+                        return;
+                    }
+                    if !body_i.fat.overlaps(&body_j.fat) || !may_pair(body_i, body_j) {
+                        return;
+                    }
+                    let pair = if slot_i < slot_j {
+                        (slot_i, slot_j)
+                    } else {
+                        (slot_j, slot_i)
+                    };
+                    if index.contains(pair) {
+                        return;
+                    }
+                    if let Some((a, b)) = kept.offer(pair) {
+                        for s in [a, b] {
+                            if let Some(r) = retry.get_mut(s as usize) {
+                                *r = true;
+                            }
+                        }
+                    }
+                });
+            self.count_work();
+        }
+        let dropped = kept.dropped;
+        // Keys are unique (each unordered pair is offered once), so an unstable sort is
         // deterministic.
         pairs.sort_unstable();
         for (i, b) in bodies.iter_mut() {
@@ -120,63 +274,100 @@ impl<const N: usize> BroadPhase<N> {
         report.dropped_pairs = report.dropped_pairs.saturating_add(dropped);
     }
 
-    /// Make `order` hold exactly the live slots: drop freed slots (keeping the relative
-    /// order of the others), then append new slots in slot order.
-    fn sync_with_pool(&mut self, bodies: &Pool<Body<'_>, N>) {
-        self.order.retain(|&s| bodies.at(s as usize).is_some());
-        if self.order.len() == bodies.len() {
-            // Every slot in `order` is live and distinct, and there are as many as live
-            // slots: nothing is missing.
+    /// The slots of every body whose enlarged box overlaps `aabb`, in slot order, into
+    /// `out` (cleared first). Uses the tree unless it is stale, then the bodies' boxes.
+    /// Valid after the step's search (stage 3): every box that changed since is the box of
+    /// a body flagged `moved`, which the search has put into the tree.
+    pub fn overlapping(&self, bodies: &Pool<Body<'_>, N>, aabb: &Aabb, out: &mut HVec<u32, N>) {
+        out.clear();
+        if self.stale {
+            for (slot, b) in bodies.iter() {
+                if b.fat.overlaps(aabb) {
+                    // Cannot fail: at most `N` distinct slots.
+                    let _ = out.push(slot as u32);
+                }
+            }
             return;
         }
-        let mut listed = [false; N];
-        for &s in self.order.iter() {
-            if let Some(flag) = listed.get_mut(s as usize) {
-                *flag = true;
+        self.tree.query(aabb, ANY, |slot| {
+            if bodies
+                .at(slot as usize)
+                .is_some_and(|b| b.fat.overlaps(aabb))
+            {
+                let _ = out.push(slot);
             }
-        }
-        for (slot, _) in bodies.iter() {
-            if !listed.get(slot).copied().unwrap_or(true) {
-                // Cannot fail: `order` holds distinct slots below `N`.
-                let _ = self.order.push(slot as u32);
-            }
+        });
+        // Distinct slots: an unstable sort is deterministic.
+        out.sort_unstable();
+    }
+}
+
+/// The pair buffer of one search, keeping the `P` smallest keys offered: plain pushes
+/// until it is full, then a max-heap on the key (the largest kept pair at the root), so
+/// a new pair smaller than the root replaces it. The result is the `P` smallest, in heap
+/// order: sort it afterwards.
+struct SmallestPairs<'p, const P: usize> {
+    pairs: &'p mut HVec<(u32, u32), P>,
+    /// The buffer is full and a heap.
+    heap: bool,
+    /// Pairs offered and not kept (dropped at once, or pushed out by a smaller one).
+    dropped: u32,
+}
+
+impl<'p, const P: usize> SmallestPairs<'p, P> {
+    fn new(pairs: &'p mut HVec<(u32, u32), P>) -> Self {
+        SmallestPairs {
+            pairs,
+            heap: false,
+            dropped: 0,
         }
     }
 
-    /// Insertion sort of `order` by `(fat.min.x, slot)`. Nearly sorted input (last
-    /// step's order) costs about one comparison per slot.
-    fn sort_by_min_x(&mut self, bodies: &Pool<Body<'_>, N>) {
-        let order = self.order.as_mut_slice();
-        for i in 1..order.len() {
-            let mut j = i;
-            // Sift element `i` down while it sorts before its left neighbour. `j` falls
-            // by one each round, so at most `i` rounds.
-            while j > 0 {
-                let (Some(&left), Some(&right)) = (order.get(j - 1), order.get(j)) else {
-                    break;
-                };
-                if !sorts_before(bodies, right, left) {
-                    break;
-                }
-                order.swap(j - 1, j);
-                j -= 1;
+    /// Offer a pair (distinct from every pair offered before); returns the pair dropped
+    /// for it, if any: itself, or the largest kept pair it pushed out.
+    fn offer(&mut self, pair: (u32, u32)) -> Option<(u32, u32)> {
+        if !self.heap {
+            if self.pairs.push(pair).is_ok() {
+                return None;
             }
+            // Full: make it a max-heap, sifting down every parent from the last one.
+            for i in (0..self.pairs.len() / 2).rev() {
+                sift_down(self.pairs, i);
+            }
+            self.heap = true;
+        }
+        self.dropped = self.dropped.saturating_add(1);
+        match self.pairs.first_mut() {
+            Some(root) if pair < *root => {
+                let out = core::mem::replace(root, pair);
+                sift_down(self.pairs, 0);
+                Some(out)
+            }
+            _ => Some(pair),
         }
     }
 }
 
-/// True when slot `s` sorts strictly before slot `t`: smaller `fat.min.x`, ties (and
-/// `-0.0` against `+0.0`, by `total_cmp`) broken by the smaller slot.
-fn sorts_before<const N: usize>(bodies: &Pool<Body<'_>, N>, s: u32, t: u32) -> bool {
-    let x = |slot: u32| {
-        bodies
-            .at(slot as usize)
-            .map_or(f32::INFINITY, |b| b.fat.min.x)
-    };
-    match x(s).total_cmp(&x(t)) {
-        core::cmp::Ordering::Less => true,
-        core::cmp::Ordering::Greater => false,
-        core::cmp::Ordering::Equal => s < t,
+/// Restore the max-heap below position `i` (children of `k` at `2k + 1`, `2k + 2`).
+fn sift_down(heap: &mut [(u32, u32)], mut i: usize) {
+    // The position at least doubles every round: at most log₂ len rounds.
+    while let Some(&here) = heap.get(i) {
+        let (l, r) = (2 * i + 1, 2 * i + 2);
+        let mut top = i;
+        let mut top_pair = here;
+        for c in [l, r] {
+            if let Some(&p) = heap.get(c) {
+                if p > top_pair {
+                    top = c;
+                    top_pair = p;
+                }
+            }
+        }
+        if top == i {
+            return;
+        }
+        heap.swap(i, top);
+        i = top;
     }
 }
 
@@ -264,6 +455,7 @@ pub(crate) fn body_bounds(body: &Body<'_>, cfg: &WorldConfig) -> Aabb {
 mod tests {
     use super::*;
     use crate::dynamics::body::BodyDesc;
+    use crate::dynamics::contact::contains_pair;
     use crate::math::Vec3;
     use crate::rng::SplitMix64;
     use crate::shape::Shape;
@@ -278,84 +470,257 @@ mod tests {
         Body::from_desc(&desc.position(p)).unwrap()
     }
 
-    /// The search against an O(n²) loop over all pairs with the same rules, over random
-    /// scenes with removals in between (so the order must resync) and random `moved`
-    /// flags and existing contacts.
+    /// Random bodies: dynamic, static and kinematic spheres with random filters.
+    fn random_body(rng: &mut SplitMix64) -> Body<'static> {
+        let kinds = [BodyKind::Dynamic, BodyKind::Static, BodyKind::Kinematic];
+        let kind = kinds[(rng.next_u64() % 3) as usize];
+        let p = Vec3::new(
+            rng.range(-6.0, 6.0),
+            rng.range(-2.0, 2.0),
+            rng.range(-2.0, 2.0),
+        );
+        let mut b = body(kind, p, rng.range(0.1, 1.0));
+        b.group = 1 << (rng.next_u64() % 3);
+        b.mask = if rng.next_u64().is_multiple_of(4) {
+            0b101
+        } else {
+            u32::MAX
+        };
+        b
+    }
+
+    /// Some random contacts between live bodies, sorted by key.
+    fn random_contacts<const N: usize>(
+        pool: &Pool<Body<'static>, N>,
+        rng: &mut SplitMix64,
+    ) -> std::vec::Vec<Contact> {
+        let mut contacts = std::vec::Vec::new();
+        for (i, _) in pool.iter() {
+            for (j, _) in pool.iter() {
+                if i < j && rng.next_u64().is_multiple_of(7) {
+                    contacts.push(Contact::new_pair(
+                        i as u32,
+                        j as u32,
+                        crate::Material::DEFAULT,
+                        false,
+                    ));
+                }
+            }
+        }
+        contacts
+    }
+
+    /// What the search must find, by an O(n²) loop over all pairs with the same rules.
+    fn brute_force<const N: usize>(
+        pool: &Pool<Body<'static>, N>,
+        contacts: &[Contact],
+    ) -> std::vec::Vec<(u32, u32)> {
+        let mut expected = std::vec::Vec::new();
+        for (i, a) in pool.iter() {
+            for (j, b) in pool.iter() {
+                if i < j
+                    && (a.moved || b.moved)
+                    && a.fat.overlaps(&b.fat)
+                    && may_pair(a, b)
+                    && !contains_pair(contacts, (i as u32, j as u32))
+                {
+                    expected.push((i as u32, j as u32));
+                }
+            }
+        }
+        expected
+    }
+
+    fn moved_flags<const N: usize>(pool: &Pool<Body<'static>, N>) -> std::vec::Vec<bool> {
+        pool.iter().map(|(_, b)| b.moved).collect()
+    }
+
+    /// The search against the brute-force loop, over random scenes with removals and
+    /// additions in between (some removals tell the broad phase, some do not: a slot
+    /// taken over without a removal must still work), random `moved` flags (a moved body
+    /// gets a new box, the others keep theirs, as in the step) and existing contacts.
+    /// With a small buffer, the smallest keys are kept and the bodies of the others stay
+    /// flagged. The tree stays valid and holds every body's box.
     #[test]
     fn search_matches_brute_force_over_steps() {
         const N: usize = 48;
         let mut rng = SplitMix64::new(7);
         let mut pool: Pool<Body<'static>, N> = Pool::new();
         let mut bp: BroadPhase<N> = BroadPhase::new();
-        let kinds = [BodyKind::Dynamic, BodyKind::Static, BodyKind::Kinematic];
         for round in 0..12 {
             let handles: std::vec::Vec<_> = (0..N).filter_map(|i| pool.handle_at(i)).collect();
             for h in handles.iter().step_by(5) {
                 pool.remove(*h);
-            }
-            while pool.len() < N - 3 {
-                let kind = kinds[(rng.next_u64() % 3) as usize];
-                let p = Vec3::new(
-                    rng.range(-6.0, 6.0),
-                    rng.range(-2.0, 2.0),
-                    rng.range(-2.0, 2.0),
-                );
-                let mut b = body(kind, p, rng.range(0.1, 1.0));
-                b.group = 1 << (rng.next_u64() % 3);
-                b.mask = if rng.next_u64().is_multiple_of(4) {
-                    0b101
-                } else {
-                    u32::MAX
-                };
-                pool.insert(b).unwrap();
+                if round % 3 != 1 {
+                    bp.remove_body(h.index);
+                }
             }
             for (_, b) in pool.iter_mut() {
-                b.pose.position += Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
-                b.fat = b.shape.aabb(&b.pose).expanded(rng.range(0.0, 0.2));
-                b.moved = rng.next_u64().is_multiple_of(3);
-            }
-            // Some pairs already have contacts.
-            let mut contacts: std::vec::Vec<Contact> = std::vec::Vec::new();
-            for (i, _) in pool.iter() {
-                for (j, _) in pool.iter() {
-                    if i < j && rng.next_u64().is_multiple_of(7) {
-                        contacts.push(Contact::new_pair(
-                            i as u32,
-                            j as u32,
-                            crate::Material::DEFAULT,
-                            false,
-                        ));
-                    }
+                b.moved = rng.next_u64().is_multiple_of(2);
+                if b.moved {
+                    b.pose.position += Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
+                    b.fat = b.shape.aabb(&b.pose).expanded(rng.range(0.0, 0.2));
                 }
             }
-            let mut expected = std::vec::Vec::new();
-            for (i, a) in pool.iter() {
-                for (j, b) in pool.iter() {
-                    if i < j
-                        && (a.moved || b.moved)
-                        && a.fat.overlaps(&b.fat)
-                        && may_pair(a, b)
-                        && !contains_pair(&contacts, (i as u32, j as u32))
-                    {
-                        expected.push((i as u32, j as u32));
-                    }
-                }
+            while pool.len() < N - 3 {
+                // New bodies are flagged `moved`.
+                pool.insert(random_body(&mut rng)).unwrap();
             }
+            let contacts = random_contacts(&pool, &mut rng);
+            let expected = brute_force(&pool, &contacts);
+            assert!(
+                expected.len() > 8,
+                "round {round}: scene too sparse to test"
+            );
+
+            // A small buffer: the 8 smallest keys.
+            let (mut small_pool, mut small_bp) = (pool.clone(), bp.clone());
+            let mut pairs: HVec<(u32, u32), 8> = HVec::new();
+            let mut report = StepReport::default();
+            small_bp.find_new_pairs(&mut small_pool, &contacts, &mut pairs, &mut report);
+            assert_eq!(pairs.as_slice(), &expected[..8], "round {round}");
+            assert_eq!(report.dropped_pairs as usize, expected.len() - 8);
+            let mut retry = [false; N];
+            for &(a, b) in &expected[8..] {
+                retry[a as usize] = true;
+                retry[b as usize] = true;
+            }
+            let retry: std::vec::Vec<bool> = pool.iter().map(|(i, _)| retry[i]).collect();
+            assert_eq!(moved_flags(&small_pool), retry, "round {round}");
+
             let mut pairs: HVec<(u32, u32), 2048> = HVec::new();
             let mut report = StepReport::default();
             bp.find_new_pairs(&mut pool, &contacts, &mut pairs, &mut report);
-            assert!(
-                !expected.is_empty(),
-                "round {round}: scene too sparse to test"
-            );
             assert_eq!(pairs.as_slice(), expected.as_slice(), "round {round}");
             assert_eq!(report.dropped_pairs, 0);
             assert!(pool.iter().all(|(_, b)| !b.moved), "flags cleared");
-            assert_eq!(bp.order.len(), pool.len());
-            for w in bp.order.windows(2) {
-                assert!(sorts_before(&pool, w[0], w[1]), "round {round}: not sorted");
+            bp.tree.validate().unwrap();
+            for (i, b) in pool.iter() {
+                assert_eq!(bp.tree.aabb(bp.proxies[i]), Some(b.fat), "round {round}");
             }
         }
+    }
+
+    /// A broad phase whose tree grew through a long history (bodies inserted in reverse
+    /// slot order, moved about, then put in place), one built by the first search in slot
+    /// order, and one rebuilt after `invalidate` have different trees and give the same
+    /// pairs, the same overflow and the same flags.
+    #[test]
+    fn pairs_do_not_depend_on_the_tree_shape() {
+        const N: usize = 64;
+        let mut rng = SplitMix64::new(11);
+        let mut pool: Pool<Body<'static>, N> = Pool::new();
+        while pool.len() < N {
+            pool.insert(random_body(&mut rng)).unwrap();
+        }
+        let contacts = random_contacts(&pool, &mut rng);
+        let fresh: BroadPhase<N> = BroadPhase::new();
+        let mut history: BroadPhase<N> = BroadPhase::new();
+        for _ in 0..5 {
+            for (i, b) in pool.iter().collect::<std::vec::Vec<_>>().into_iter().rev() {
+                let mut elsewhere = *b;
+                elsewhere.fat = b.fat.translated(Vec3::new(rng.range(-5.0, 5.0), 0.0, 0.0));
+                history.sync(i, &elsewhere);
+            }
+        }
+        for (i, b) in pool.iter().collect::<std::vec::Vec<_>>().into_iter().rev() {
+            history.sync(i, b);
+        }
+        let mut rebuilt = history.clone();
+        rebuilt.invalidate();
+
+        fn search<const N: usize, const P: usize>(
+            bp: &BroadPhase<N>,
+            pool: &Pool<Body<'static>, N>,
+            contacts: &[Contact],
+        ) -> (
+            std::vec::Vec<(u32, u32)>,
+            u32,
+            std::vec::Vec<bool>,
+            BroadPhase<N>,
+        ) {
+            let (mut bp, mut pool) = (bp.clone(), pool.clone());
+            let mut pairs: HVec<(u32, u32), P> = HVec::new();
+            let mut report = StepReport::default();
+            bp.find_new_pairs(&mut pool, contacts, &mut pairs, &mut report);
+            (pairs.to_vec(), report.dropped_pairs, moved_flags(&pool), bp)
+        }
+        let full = search::<N, 4096>(&fresh, &pool, &contacts);
+        assert!(full.0.len() > 40 && full.1 == 0);
+        let small = search::<N, 16>(&fresh, &pool, &contacts);
+        assert!(small.1 > 20, "{} dropped", small.1);
+        assert_eq!(small.0, full.0[..16]);
+        for bp in [&history, &rebuilt] {
+            let f = search::<N, 4096>(bp, &pool, &contacts);
+            let s = search::<N, 16>(bp, &pool, &contacts);
+            assert_eq!((&f.0, f.1, &f.2), (&full.0, full.1, &full.2));
+            assert_eq!((&s.0, s.1, &s.2), (&small.0, small.1, &small.2));
+        }
+        // The trees really differ: leaves in other nodes.
+        let built = search::<N, 16>(&fresh, &pool, &contacts).3;
+        assert_ne!(built.proxies, history.proxies);
+        assert_ne!(
+            search::<N, 16>(&rebuilt, &pool, &contacts).3.proxies,
+            history.proxies
+        );
+    }
+
+    /// Continuous collision's query: the slots whose boxes overlap a box, in slot order,
+    /// from the tree and from the stale fallback alike.
+    #[test]
+    fn overlapping_lists_slots_in_order() {
+        const N: usize = 40;
+        let mut rng = SplitMix64::new(5);
+        let mut pool: Pool<Body<'static>, N> = Pool::new();
+        while pool.len() < N {
+            pool.insert(random_body(&mut rng)).unwrap();
+        }
+        let mut bp: BroadPhase<N> = BroadPhase::new();
+        let mut pairs: HVec<(u32, u32), 1024> = HVec::new();
+        bp.find_new_pairs(&mut pool, &[], &mut pairs, &mut StepReport::default());
+        let mut stale = bp.clone();
+        stale.invalidate();
+        let mut out: HVec<u32, N> = HVec::new();
+        for _ in 0..30 {
+            let c = Vec3::new(rng.range(-6.0, 6.0), 0.0, 0.0);
+            let q = Aabb::from_center_half(c, Vec3::new(rng.range(0.0, 2.0), 1.0, 1.0));
+            let expected: std::vec::Vec<u32> = pool
+                .iter()
+                .filter(|(_, b)| b.fat.overlaps(&q))
+                .map(|(i, _)| i as u32)
+                .collect();
+            bp.overlapping(&pool, &q, &mut out);
+            assert_eq!(out.as_slice(), expected.as_slice());
+            stale.overlapping(&pool, &q, &mut out);
+            assert_eq!(out.as_slice(), expected.as_slice());
+        }
+    }
+
+    /// A world at rest does no tree work: once every body sleeps (or nothing leaves its
+    /// box), steps neither move leaves nor query.
+    #[test]
+    fn resting_world_does_no_tree_work() {
+        let mut world: crate::World<16, 64> = crate::World::new();
+        let ground = Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap();
+        world
+            .add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+            .unwrap();
+        for i in 0..4 {
+            let p = Vec3::new(2.0 * i as f32, 0.5, 0.0);
+            let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+            world.add(BodyDesc::dynamic(cube).position(p)).unwrap();
+        }
+        let mut steps = 0;
+        while world.step().awake_bodies > 0 {
+            steps += 1;
+            assert!(steps < 600, "never fell asleep");
+        }
+        assert!(world.broad.work > 0);
+        let work = world.broad.work;
+        for _ in 0..30 {
+            world.step();
+        }
+        assert_eq!(world.broad.work, work, "tree work while everything sleeps");
     }
 
     /// A spinning body's box covers its shape at the end of any part of the step, with
@@ -388,17 +753,18 @@ mod tests {
         assert!(end.position.distance(b.pose.position) > 0.04);
     }
 
-    /// A full pair buffer keeps the first pairs in sweep order, counts the rest, and
-    /// leaves their bodies flagged for the next search.
+    /// A full pair buffer keeps the pairs with the smallest keys, counts the rest, and
+    /// leaves their bodies flagged for the next search. The spheres lie right to left in
+    /// slot order, so a sweep along x would meet the largest keys first.
     #[test]
-    fn full_pair_buffer_keeps_first_in_sweep_order() {
+    fn full_pair_buffer_keeps_smallest_keys() {
         const N: usize = 6;
         let mut pool: Pool<Body<'static>, N> = Pool::new();
-        // Six spheres on a line 0.5 apart: slots sorted by x are 0..6.
+        // Six spheres on a line 0.5 apart, slot 0 rightmost.
         for i in 0..N {
             pool.insert(body(
                 BodyKind::Dynamic,
-                Vec3::new(i as f32 * 0.5, 0.0, 0.0),
+                Vec3::new((N - 1 - i) as f32 * 0.5, 0.0, 0.0),
                 0.3,
             ))
             .unwrap();
@@ -407,11 +773,56 @@ mod tests {
         let mut pairs: HVec<(u32, u32), 3> = HVec::new();
         let mut report = StepReport::default();
         bp.find_new_pairs(&mut pool, &[], &mut pairs, &mut report);
-        // Overlapping neighbours: (0,1) (1,2) (2,3) (3,4) (4,5): sweep order finds them in
-        // that order, so the first three are kept.
+        // Overlapping neighbours: (0,1) (1,2) (2,3) (3,4) (4,5): the three smallest kept.
         assert_eq!(pairs.as_slice(), &[(0, 1), (1, 2), (2, 3)]);
         assert_eq!(report.dropped_pairs, 2);
-        let moved: std::vec::Vec<bool> = pool.iter().map(|(_, b)| b.moved).collect();
-        assert_eq!(moved, [false, false, false, true, true, true]);
+        assert_eq!(moved_flags(&pool), [false, false, false, true, true, true]);
+        // Offered again: the contacts now exist, so the two left over fit.
+        let contacts: std::vec::Vec<Contact> = pairs
+            .iter()
+            .map(|&(a, b)| Contact::new_pair(a, b, crate::Material::DEFAULT, false))
+            .collect();
+        let mut report = StepReport::default();
+        bp.find_new_pairs(&mut pool, &contacts, &mut pairs, &mut report);
+        assert_eq!(pairs.as_slice(), &[(3, 4), (4, 5)]);
+        assert_eq!(report.dropped_pairs, 0);
+        assert!(pool.iter().all(|(_, b)| !b.moved));
+    }
+
+    /// The heap keeps the smallest keys whatever the order they come in, for buffers of
+    /// several sizes (none included), and hands back exactly the others.
+    #[test]
+    fn smallest_pairs_whatever_the_order() {
+        fn check<const P: usize>(all: &[(u32, u32)], rng: &mut SplitMix64) {
+            for _ in 0..5 {
+                // Shuffle (Fisher–Yates).
+                let mut order = all.to_vec();
+                for i in (1..order.len()).rev() {
+                    let j = (rng.next_u64() % (i as u64 + 1)) as usize;
+                    order.swap(i, j);
+                }
+                let mut buf: HVec<(u32, u32), P> = HVec::new();
+                let mut kept = SmallestPairs::new(&mut buf);
+                let mut dropped = std::vec::Vec::new();
+                for &p in &order {
+                    dropped.extend(kept.offer(p));
+                }
+                assert_eq!(kept.dropped as usize, all.len() - P);
+                buf.sort_unstable();
+                assert_eq!(buf.as_slice(), &all[..P]);
+                dropped.sort_unstable();
+                assert_eq!(dropped, all[P..]);
+            }
+        }
+        let mut rng = SplitMix64::new(9);
+        let mut all: std::vec::Vec<(u32, u32)> =
+            (0..60u32).map(|i| ((i * 37) % 61, (i * 11) % 13)).collect();
+        all.sort_unstable();
+        all.dedup();
+        assert!(all.len() > 40);
+        check::<0>(&all, &mut rng);
+        check::<1>(&all, &mut rng);
+        check::<5>(&all, &mut rng);
+        check::<40>(&all, &mut rng);
     }
 }

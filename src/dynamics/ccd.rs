@@ -11,8 +11,9 @@
 //! than itself. Fast bodies are taken in slot order. Each is swept from its pose at the
 //! start of the step (`pose0`) to its pose now with [`time_of_impact_unchecked`]
 //! against every other body it has a contact with (or, when a contact turned it out of
-//! its enlarged box this step, every body whose box its path touches, so a ball knocked
-//! sideways by another still meets the wall it now heads for); the other body moves over
+//! its enlarged box this step, every body whose box its path touches, asked of the
+//! broad phase's tree and taken in slot order, so a ball knocked sideways by another
+//! still meets the wall it now heads for); the other body moves over
 //! the same interval from its own `pose0` to its pose now (a static body stays put, a
 //! fast body is swept too: fast against fast). Of the hits, the earliest is taken: the
 //! fast body goes back to its pose at that time (`Motion::pose_at`), and, when the other
@@ -51,7 +52,7 @@
 use heapless::Vec as HVec;
 
 use super::body::{Body, BodyKind};
-use super::broad_phase::may_pair;
+use super::broad_phase::{may_pair, BroadPhase};
 use super::contact::Contact;
 use super::events::StepReport;
 use super::pool::Pool;
@@ -69,9 +70,10 @@ pub(crate) const MIN_TOLERANCE: f32 = 1.0e-4;
 /// time of impact (module docs). `scratch` lists `(fast slot, contact index)` so each
 /// fast body visits only its own contacts. A body whose path left its enlarged box (a
 /// contact turned it this step), or whose entries did not fit in `scratch`, is swept
-/// against every body whose box its path touches instead.
+/// against every body whose box its path touches instead, found by `broad`'s tree.
 pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
     bodies: &mut Pool<Body<'_>, N>,
+    broad: &BroadPhase<N>,
     contacts: &[Contact],
     scratch: &mut HVec<(u32, u32), P>,
     cfg: &WorldConfig,
@@ -110,6 +112,8 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
     // Unique entries: an unstable sort is deterministic.
     crate::sort::sort_unstable(scratch);
     let tolerance = scalar::max(cfg.slop, MIN_TOLERANCE);
+    // The bodies near an escaped body's path, in slot order.
+    let mut near: HVec<u32, N> = HVec::new();
     let mut at = 0usize;
     for i in 0..bodies.high() {
         let start = at;
@@ -142,8 +146,8 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
             .union(&body.shape.aabb(&body.pose));
         let escaped = overflow.get(i).copied().unwrap_or(false) || !body.fat.contains(&path);
         let hit = if escaped {
-            let near = |s: &usize| bodies.at(*s).is_some_and(|o| o.fat.overlaps(&path));
-            let all = (0..bodies.high()).filter(near).map(|s| s as u32);
+            broad.overlapping(bodies, &path, &mut near);
+            let all = near.iter().copied();
             earliest_hit(&body, &motion, i as u32, bodies, all, cfg, h, tolerance)
         } else {
             let listed = mine.iter().filter_map(partner);

@@ -170,6 +170,57 @@ pub(crate) fn contains_pair(contacts: &[Contact], pair: (u32, u32)) -> bool {
     contacts.binary_search_by(|c| c.key().cmp(&key)).is_ok()
 }
 
+/// Lookups of pairs in `contacts` (sorted by key), for a search that makes many: indexed
+/// by body A, the contacts whose lower slot is `s` are `contacts[starts[s]..starts[s +
+/// 1]]`, so a lookup scans the few contacts of one body instead of binary-searching them
+/// all. Building the index reads every contact's `a` once, which pays when there are
+/// many lookups; without it ([`PairIndex::new`] with `build` false) a lookup is the
+/// binary search of [`contains_pair`]. Either way the answers are the same.
+pub(crate) struct PairIndex<'c, const N: usize> {
+    contacts: &'c [Contact],
+    /// Per slot, the position of its first contact as body A, or of the first contact
+    /// after where it would be; unused when not built.
+    starts: [u32; N],
+    built: bool,
+}
+
+impl<'c, const N: usize> PairIndex<'c, N> {
+    /// Lookups in `contacts` (sorted by key, slots below `N`), indexed if `build`.
+    pub fn new(contacts: &'c [Contact], build: bool) -> Self {
+        let mut starts = [0u32; N];
+        if build {
+            let mut at = 0usize;
+            for (slot, start) in starts.iter_mut().enumerate() {
+                // `at` only grows: at most `contacts.len()` rounds over all slots.
+                while contacts.get(at).is_some_and(|c| (c.a as usize) < slot) {
+                    at += 1;
+                }
+                *start = at as u32;
+            }
+        }
+        PairIndex {
+            contacts,
+            starts,
+            built: build,
+        }
+    }
+
+    /// True when the contacts hold the pair `(a, b)`, `a < b`.
+    pub fn contains(&self, (a, b): (u32, u32)) -> bool {
+        if !self.built {
+            return contains_pair(self.contacts, (a, b));
+        }
+        let start = self.starts.get(a as usize).copied().unwrap_or(0) as usize;
+        let end = self
+            .starts
+            .get(a as usize + 1)
+            .map_or(self.contacts.len(), |&e| e as usize);
+        self.contacts
+            .get(start..end)
+            .is_some_and(|run| run.iter().any(|c| c.a == a && c.b == b))
+    }
+}
+
 /// Merge `pairs` (sorted by key, distinct, none already in `contacts`) into `contacts`
 /// as new contacts with no points, keeping the order. Pairs beyond the capacity are
 /// dropped from the end (the highest keys), counted in `report.dropped_contacts`, and their
@@ -695,6 +746,36 @@ mod tests {
 
     /// The drift bound holds for random relative moves: every point within the radius
     /// moves by at most the bound.
+    /// The index answers every lookup as the binary search does, built or not, with
+    /// slots that have no contact, a last slot, and pairs beyond the contacts.
+    #[test]
+    fn pair_index_agrees_with_binary_search() {
+        const N: usize = 24;
+        let mut rng = crate::rng::SplitMix64::new(21);
+        for round in 0..20 {
+            let mut contacts = std::vec::Vec::new();
+            for a in 0..N as u32 {
+                for b in a + 1..N as u32 {
+                    if rng.next_u64().is_multiple_of(1 + round % 5) {
+                        contacts.push(Contact::new_pair(a, b, Material::DEFAULT, false));
+                    }
+                }
+            }
+            for build in [false, true] {
+                let index: PairIndex<'_, N> = PairIndex::new(&contacts, build);
+                for a in 0..N as u32 + 2 {
+                    for b in a + 1..N as u32 + 3 {
+                        assert_eq!(
+                            index.contains((a, b)),
+                            contains_pair(&contacts, (a, b)),
+                            "round {round} ({a}, {b}) built {build}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn relative_drift_bounds_point_motion() {
         let mut rng = crate::rng::SplitMix64::new(3);

@@ -85,9 +85,8 @@ pub struct StepReport {
     /// Sweeps that found a time of impact and moved a body back.
     pub ccd_hits: u32,
     /// New candidate pairs that did not fit in the step's pair buffer (`CONTACTS` long):
-    /// the ones found first by the sweep are kept (it visits bodies by increasing lower
-    /// x bound of their broad-phase boxes, ties by slot); the bodies of the others look
-    /// again next step.
+    /// those with the lowest `(lower slot, higher slot)` keys are kept, whatever order the
+    /// broad phase found them in; the bodies of the others look again next step.
     pub dropped_pairs: u32,
     /// New pairs that did not fit in the contact pool: those with the lowest
     /// `(lower slot, higher slot)` keys are kept; the bodies of the others look again

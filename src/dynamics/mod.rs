@@ -1,5 +1,6 @@
 //! Stateful simulation: bodies in pools, the stages of the step, queries.
 
+pub(crate) mod aabb_tree;
 pub mod body;
 pub(crate) mod broad_phase;
 pub(crate) mod ccd;

@@ -816,8 +816,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             }
         }
         if apply {
-            // The sweep order is derived: the broad phase sorts the live slots again.
-            self.broad.order.clear();
+            // The broad-phase tree is derived: the next step builds it again.
+            self.broad.invalidate();
         }
         let n_contacts = r.u32()? as usize;
         if n_contacts > CONTACTS {
