@@ -267,7 +267,7 @@ impl<const N: usize> BroadPhase<N> {
         let dropped = kept.dropped;
         // Keys are unique (each unordered pair is offered once), so an unstable sort is
         // deterministic.
-        pairs.sort_unstable();
+        crate::sort::sort_unstable(pairs);
         for (i, b) in bodies.iter_mut() {
             b.moved = retry.get(i).copied().unwrap_or(false);
         }
@@ -298,7 +298,7 @@ impl<const N: usize> BroadPhase<N> {
             }
         });
         // Distinct slots: an unstable sort is deterministic.
-        out.sort_unstable();
+        crate::sort::sort_unstable(out);
     }
 }
 
@@ -363,7 +363,7 @@ fn sift_down(heap: &mut [(u32, u32)], mut i: usize) {
                 }
             }
         }
-        if top == i {
+        if top == i || i >= heap.len() || top >= heap.len() {
             return;
         }
         heap.swap(i, top);

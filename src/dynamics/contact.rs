@@ -324,7 +324,7 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let slots = contacts.as_mut_slice();
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
-        if read != write && read < slots.len() {
+        if read != write && read < slots.len() && write < slots.len() {
             slots.swap(read, write);
         }
         let Some(c) = slots.get_mut(write) else {
