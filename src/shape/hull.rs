@@ -22,11 +22,13 @@ pub const MAX_HULL_VERTICES: usize = 64;
 pub const MAX_HULL_FACES: usize = 2 * MAX_HULL_VERTICES - 4;
 /// Most polygon corners over all faces (twice the edge bound `3V − 6`).
 pub const MAX_HULL_FACE_INDICES: usize = 2 * (3 * MAX_HULL_VERTICES - 6);
+/// Most edges a hull keeps: a polyhedron of `V` vertices has at most `3V − 6`.
+pub const MAX_HULL_EDGES: usize = 3 * MAX_HULL_VERTICES - 6;
 /// Most points [`ConvexHull::new`] accepts.
 pub const MAX_HULL_INPUT_POINTS: usize = 1024;
 
 /// A convex polytope. Build it with [`ConvexHull::new`]; it is plain data, `Copy`, and about
-/// 3.5 KiB.
+/// 4.2 KiB.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConvexHull {
     /// Vertices (local frame, m); the first `vertex_count` are used.
@@ -41,6 +43,15 @@ pub struct ConvexHull {
     pub(crate) face_len: [u8; MAX_HULL_FACES],
     pub(crate) face_count: u8,
     pub(crate) face_indices: [u8; MAX_HULL_FACE_INDICES],
+    /// Edges between faces that are not coplanar, `[v0, v1, face0, face1]` with `v0 < v1`,
+    /// `face0` the face that runs `v0 → v1` counter-clockwise, `face1` the one that runs
+    /// `v1 → v0` (see [`HullEdge`]); the first `edge_count` are used, in the order of
+    /// their first corner. The seams of a face split into fan pieces are left out.
+    pub(crate) edges: [[u8; 4]; MAX_HULL_EDGES],
+    pub(crate) edge_count: u8,
+    /// True when every corner's edge found the face on its other side (always, for a
+    /// closed mesh): the edge list is complete and the separating axis test may use it.
+    pub(crate) closed: bool,
     /// Centroid of the volume (local frame).
     pub(crate) centroid: Vec3,
     /// The distance tolerance the hull was built with (m).
@@ -48,6 +59,23 @@ pub struct ConvexHull {
     /// True when the cloud needed more than [`MAX_HULL_VERTICES`] vertices and the hull
     /// keeps the greedy subset described at [`ConvexHull::new`].
     pub(crate) reduced: bool,
+}
+
+/// One edge of a hull between two faces that are not coplanar: its end vertices
+/// `v0 < v1` and the faces on either side. `face0` runs along `v0 → v1` counter-clockwise
+/// about its normal, `face1` along `v1 → v0`, so `normal(face1) × normal(face0)` points
+/// along `v0 − v1`: the edge vector stands in for that cross product in the separating
+/// axis test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct HullEdge {
+    /// Lower vertex index.
+    pub v0: u8,
+    /// Higher vertex index.
+    pub v1: u8,
+    /// Face along `v0 → v1`.
+    pub face0: u8,
+    /// Face along `v1 → v0`.
+    pub face1: u8,
 }
 
 /// A hull with nothing in it, filled by the builder.
@@ -60,6 +88,9 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     face_len: [0; MAX_HULL_FACES],
     face_count: 0,
     face_indices: [0; MAX_HULL_FACE_INDICES],
+    edges: [[0; 4]; MAX_HULL_EDGES],
+    edge_count: 0,
+    closed: false,
     centroid: Vec3::ZERO,
     tolerance: 0.0,
     reduced: false,
@@ -172,6 +203,50 @@ impl ConvexHull {
         self.reduced
     }
 
+    /// Number of edges (see [`HullEdge`]).
+    pub(crate) fn edge_count(&self) -> usize {
+        (self.edge_count as usize).min(MAX_HULL_EDGES)
+    }
+
+    /// Edge `e`, or `None` past the last.
+    #[inline]
+    pub(crate) fn edge(&self, e: usize) -> Option<HullEdge> {
+        if e >= self.edge_count() {
+            return None;
+        }
+        let [v0, v1, face0, face1] = *self.edges.get(e)?;
+        Some(HullEdge {
+            v0,
+            v1,
+            face0,
+            face1,
+        })
+    }
+
+    /// True when the edge list is complete (see [`ConvexHull::closed`]).
+    pub(crate) fn is_closed(&self) -> bool {
+        self.closed
+    }
+
+    /// Face `f` as a polygon with feature ids (local frame); out-of-range indices give
+    /// face 0.
+    pub(crate) fn face(&self, f: usize) -> Face {
+        let f = if f < self.face_count() { f } else { 0 };
+        let (normal, _) = self.plane(f);
+        let mut face = Face::new(normal, FeatureId::face(f as u32));
+        let idx = self.face_vertices(f);
+        let next = idx.iter().skip(1).chain(idx.first());
+        for (&i, &j) in idx.iter().zip(next) {
+            let (i, j) = (i as u32, j as u32);
+            face.push(
+                self.core_vertex(i),
+                FeatureId::vertex(i),
+                FeatureId::edge(i, j),
+            );
+        }
+        face
+    }
+
     /// The face planes in use, `(normal, offset)`, in face order.
     fn planes(&self) -> impl Iterator<Item = (Vec3, f32)> + '_ {
         self.normals
@@ -213,19 +288,7 @@ impl ConvexHull {
                 best = f;
             }
         }
-        let (normal, _) = self.plane(best);
-        let mut face = Face::new(normal, FeatureId::face(best as u32));
-        let idx = self.face_vertices(best);
-        let next = idx.iter().skip(1).chain(idx.first());
-        for (&i, &j) in idx.iter().zip(next) {
-            let (i, j) = (i as u32, j as u32);
-            face.push(
-                self.core_vertex(i),
-                FeatureId::vertex(i),
-                FeatureId::edge(i, j),
-            );
-        }
-        face
+        self.face(best)
     }
 
     pub(crate) fn aabb(&self, pose: &Iso) -> Aabb {
@@ -1212,6 +1275,7 @@ impl<'p> Builder<'p> {
         if hull.face_count < 4 || hull.vertex_count < 4 {
             return Err(Error::Hull(HullError::Coplanar));
         }
+        link_edges(&mut hull);
         // Not seen after the width test, but a hull without volume is flat.
         let (_, centroid, _) = hull
             .volume_integrals()
@@ -1555,6 +1619,47 @@ impl Polygons {
             *len -= 1;
         }
     }
+}
+
+/// Fill the hull's edge list: every directed edge `i → j` (`i < j`) of a face, paired with
+/// the face that holds `j → i`, unless the two faces are coplanar (the seam of a split
+/// face). Quadratic in the number of corners (at most 372), once per hull. `closed` says
+/// whether every corner found its twin.
+fn link_edges(hull: &mut ConvexHull) {
+    let faces = hull.face_count();
+    // The directed edge leaving corner k of face f.
+    let edge_at = |h: &ConvexHull, f: usize, k: usize| -> Option<(u8, u8)> {
+        let v = h.face_vertices(f);
+        Some((*v.get(k)?, *v.get((k + 1) % v.len().max(1))?))
+    };
+    let mut closed = true;
+    let mut count = 0usize;
+    for f in 0..faces {
+        for k in 0..hull.face_vertices(f).len() {
+            let Some((i, j)) = edge_at(hull, f, k) else {
+                continue;
+            };
+            let twin = (0..faces).filter(|&g| g != f).find(|&g| {
+                (0..hull.face_vertices(g).len()).any(|m| edge_at(hull, g, m) == Some((j, i)))
+            });
+            let Some(g) = twin else {
+                closed = false;
+                continue;
+            };
+            let coplanar = hull.normals.get(f) == hull.normals.get(g);
+            if i < j && !coplanar {
+                match hull.edges.get_mut(count) {
+                    Some(slot) => {
+                        *slot = [i, j, f as u8, g as u8];
+                        count += 1;
+                    }
+                    None => closed = false,
+                }
+            }
+        }
+    }
+    hull.edge_count = count as u8;
+    hull.closed = closed;
 }
 
 /// Write one polygon (output vertex indices, counter-clockwise, first corner lowest) with
