@@ -177,33 +177,50 @@ pub(crate) fn penetration_in_a_capped(
         _ => {
             let mut cache = SimplexCache::default();
             let core = gjk::gjk_cores(&pa, &pb, &mut cache, MAX_GJK_ITERATIONS);
-            if core.status == GjkStatus::Overlapping {
-                let c = epa_cores(&pa, &pb, &core.simplex, caps);
-                inflated(c, ra, rb)
-            } else {
-                // Cores apart: GJK's answer is exact (an upper bound on the core distance,
-                // so a lower bound on the depth, when GJK hit its cap).
-                let gap = gjk::radius_gap(core.distance, ra, rb);
-                if gap > 0.0 {
-                    return None;
-                }
-                let n = core.normal;
-                Penetration {
-                    depth: -gap,
-                    normal: n,
-                    point_a: core.point_a + n * ra,
-                    point_b: core.point_b - n * rb,
-                    status: if core.status == GjkStatus::IterationLimit {
-                        EpaStatus::IterationLimit
-                    } else {
-                        EpaStatus::Converged
-                    },
-                    iterations: 0,
-                }
-            }
+            return penetration_from_gjk(&pa, &pb, &core, caps);
         }
     };
     Some(sanitized(p, Vec3::ZERO, b_in_a.position))
+}
+
+/// The penetration of two cores (neither a half-space; `pa` at the identity, `pb` at B's
+/// pose in A's frame) from the answer of GJK on them (`core`, run from any cache): when
+/// the cores overlap, EPA seeded with GJK's final simplex, so a caller that already ran
+/// GJK does not run it again; when they are apart, GJK's distance against the radii.
+/// `None` when the full shapes do not overlap. The same answer as [`penetration_in_a`]
+/// when `core` came from a fresh cache.
+pub(crate) fn penetration_from_gjk(
+    pa: &Proxy,
+    pb: &Proxy,
+    core: &gjk::CoreDistance,
+    caps: EpaCaps,
+) -> Option<Penetration> {
+    let (ra, rb) = (pa.shape.radius(), pb.shape.radius());
+    let p = if core.status == GjkStatus::Overlapping {
+        let c = epa_cores(pa, pb, &core.simplex, caps);
+        inflated(c, ra, rb)
+    } else {
+        // Cores apart: GJK's answer is exact (an upper bound on the core distance,
+        // so a lower bound on the depth, when GJK hit its cap).
+        let gap = gjk::radius_gap(core.distance, ra, rb);
+        if gap > 0.0 {
+            return None;
+        }
+        let n = core.normal;
+        Penetration {
+            depth: -gap,
+            normal: n,
+            point_a: core.point_a + n * ra,
+            point_b: core.point_b - n * rb,
+            status: if core.status == GjkStatus::IterationLimit {
+                EpaStatus::IterationLimit
+            } else {
+                EpaStatus::Converged
+            },
+            iterations: 0,
+        }
+    };
+    Some(sanitized(p, Vec3::ZERO, pb.pose.position))
 }
 
 /// The full-shape answer from the cores' answer: depth plus both radii, points moved out

@@ -5,7 +5,9 @@
 //!
 //! - [`distance`] (GJK): distance, closest points, separating normal.
 //! - [`penetration`] (EPA): depth and normal of overlapping shapes.
-//! - [`contact`]: a contact manifold of up to 4 points with feature ids.
+//! - [`contact`]: a contact manifold of up to 4 points with feature ids; [`contact_cached`]
+//!   the same with a per-pair [`PairCache`] (box and hull pairs by the separating axis
+//!   test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
 //! - [`time_of_impact`]: when two moving shapes first touch.
 //! - [`movement_bounds`]: the box a shape sweeps over a step.
 
@@ -14,15 +16,19 @@ mod clip;
 mod epa;
 mod gjk;
 mod manifold;
+mod sat;
 mod toi;
 
 pub use analytic::segment_closest_points;
 pub use epa::{penetration, EpaStatus, Penetration, MAX_EPA_FACES, MAX_EPA_VERTICES};
 pub use gjk::{distance, intersects, DistanceOutput, GjkStatus, SimplexCache, MAX_GJK_ITERATIONS};
-pub use manifold::{contact, ContactId, Manifold, ManifoldPoint, MAX_MANIFOLD_POINTS};
+pub use manifold::{
+    contact, contact_cached, contact_gjk_epa, ContactId, Manifold, ManifoldPoint,
+    MAX_MANIFOLD_POINTS,
+};
+pub use sat::{PairCache, SatAxis};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
-pub(crate) use epa::penetration_in_a;
 pub(crate) use gjk::distance_in_a;
 pub(crate) use manifold::contact_unchecked;
 pub(crate) use toi::time_of_impact_unchecked;
