@@ -168,29 +168,17 @@ pub(crate) fn distance_in_a_capped(
         }
         (Shape::HalfSpace(h), _) => {
             *cache = SimplexCache::default();
-            let pb = Proxy {
-                shape: b,
-                pose: *b_in_a,
-            };
+            let pb = Proxy::new(b, *b_in_a);
             half_space_vs_core(h.normal, &pb, b.radius())
         }
         (_, Shape::HalfSpace(h)) => {
             *cache = SimplexCache::default();
-            let pa = Proxy {
-                shape: a,
-                pose: Iso::IDENTITY,
-            };
+            let pa = Proxy::at_origin(a);
             core_vs_half_space(&pa, a.radius(), b_in_a.transform_vector(h.normal), b_in_a)
         }
         _ => {
-            let pa = Proxy {
-                shape: a,
-                pose: Iso::IDENTITY,
-            };
-            let pb = Proxy {
-                shape: b,
-                pose: *b_in_a,
-            };
+            let pa = Proxy::at_origin(a);
+            let pb = Proxy::new(b, *b_in_a);
             let core = gjk_cores(&pa, &pb, cache, max_iterations);
             inflate(&core, a.radius(), b.radius())
         }

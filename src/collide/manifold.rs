@@ -550,14 +550,8 @@ struct Axis {
 /// final simplex seeds EPA (as [`super::penetration`] would, which runs the same GJK
 /// again), so both answers are the public queries' to the bit.
 fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
-    let pa = Proxy {
-        shape: a,
-        pose: Iso::IDENTITY,
-    };
-    let pb = Proxy {
-        shape: b,
-        pose: *b_in_a,
-    };
+    let pa = Proxy::at_origin(a);
+    let pb = Proxy::new(b, *b_in_a);
     let mut cache = SimplexCache::default();
     let core = gjk::gjk_cores(&pa, &pb, &mut cache, MAX_GJK_ITERATIONS);
     let d = gjk::finite_or_fallback(

@@ -256,17 +256,54 @@ impl ConvexHull {
             .take(self.face_count())
     }
 
+    /// The vertex with the largest `v · dir`, the lowest index on ties (vertex 0 when no
+    /// product is above `−∞`, e.g. all NaN). Four running maxima over the vertices
+    /// `k, k + 4, k + 8, ...` are merged at the end: the same answer as one scan in index
+    /// order, with four independent compare chains instead of one long one (GJK waits on
+    /// every support point).
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
-        let mut best = 0usize;
-        let mut best_d = f32::NEG_INFINITY;
-        for (i, v) in self.vertices().iter().enumerate() {
-            let d = v.dot(dir);
-            if d > best_d {
-                best_d = d;
-                best = i;
+        // A select, not a branch: which vertex wins is data.
+        #[inline(always)]
+        fn take(best: &mut (f32, usize), d: f32, i: usize) {
+            let wins = d > best.0;
+            best.0 = if wins { d } else { best.0 };
+            best.1 = if wins { i } else { best.1 };
+        }
+        let vs = self.vertices();
+        let none = (f32::NEG_INFINITY, usize::MAX);
+        let (mut l0, mut l1, mut l2, mut l3) = (none, none, none, none);
+        let mut chunks = vs.chunks_exact(4);
+        let mut base = 0usize;
+        for c in chunks.by_ref() {
+            if let [v0, v1, v2, v3] = c {
+                take(&mut l0, v0.dot(dir), base);
+                take(&mut l1, v1.dot(dir), base + 1);
+                take(&mut l2, v2.dot(dir), base + 2);
+                take(&mut l3, v3.dot(dir), base + 3);
+            }
+            base += 4;
+        }
+        for (k, v) in chunks.remainder().iter().enumerate() {
+            let lane = match k {
+                0 => &mut l0,
+                1 => &mut l1,
+                _ => &mut l2,
+            };
+            take(lane, v.dot(dir), base + k);
+        }
+        // Merge: the largest product, the lowest index among equal ones.
+        let mut best = none;
+        for lane in [l0, l1, l2, l3] {
+            let better = lane.1 != usize::MAX
+                && (best.1 == usize::MAX
+                    || lane.0 > best.0
+                    || (lane.0 == best.0 && lane.1 < best.1));
+            if better {
+                best = lane;
             }
         }
-        (self.core_vertex(best as u32), best as u32)
+        let i = if best.1 == usize::MAX { 0 } else { best.1 };
+        (self.core_vertex(i as u32), i as u32)
     }
 
     pub(crate) fn core_vertex(&self, index: u32) -> Vec3 {
@@ -1717,4 +1754,65 @@ fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<
     *hull.face_len.get_mut(f).ok_or(full)? = corners.len() as u8;
     hull.face_count += 1;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The support scan in index order, strict `>`: the reference for the four-lane scan.
+    fn sequential_support(h: &ConvexHull, dir: Vec3) -> u32 {
+        let mut best = 0usize;
+        let mut best_d = f32::NEG_INFINITY;
+        for (i, v) in h.vertices().iter().enumerate() {
+            let d = v.dot(dir);
+            if d > best_d {
+                best_d = d;
+                best = i;
+            }
+        }
+        best as u32
+    }
+
+    #[test]
+    fn four_lane_support_is_the_sequential_scan() {
+        let mut rng = SplitMix64::new(21);
+        // A cube's corners (ties along the axes and diagonals) and random clouds of
+        // every remainder mod 4.
+        let cube: std::vec::Vec<Vec3> = (0..8)
+            .map(|i| {
+                let s = |b: u32| if i & b != 0 { 1.0 } else { -1.0 };
+                Vec3::new(s(1), s(2), s(4))
+            })
+            .collect();
+        let mut hulls = std::vec![ConvexHull::new(&cube).unwrap()];
+        for n in 4..40 {
+            let pts: std::vec::Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
+            if let Ok(h) = ConvexHull::new(&pts) {
+                hulls.push(h);
+            }
+        }
+        let axes = [
+            Vec3::X,
+            Vec3::Y,
+            Vec3::Z,
+            -Vec3::X,
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::ZERO,
+        ];
+        for h in &hulls {
+            for dir in axes
+                .iter()
+                .copied()
+                .chain((0..50).map(|_| rng.unit_vector()))
+            {
+                let (p, i) = h.core_support(dir);
+                assert_eq!(i, sequential_support(h, dir), "{dir:?}");
+                assert_eq!(p, h.core_vertex(i));
+            }
+            let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+            assert_eq!(h.core_support(nan).1, sequential_support(h, nan));
+        }
+    }
 }
