@@ -263,7 +263,7 @@ pub(crate) fn sphere_cuboid(
 
 /// The box feature under a point `p` outside the box `|x| <= h` (box frame): the face,
 /// edge or vertex where `p`'s clamped coordinates put its closest point.
-fn clamped_feature(p: Vec3, h: Vec3) -> FeatureId {
+pub(crate) fn clamped_feature(p: Vec3, h: Vec3) -> FeatureId {
     // Per axis: 0 inside the slab, 1 below, 2 above.
     let side = |x: f32, hk: f32| {
         if x > hk {

@@ -26,7 +26,7 @@ pub use manifold::{
     contact, contact_cached, contact_gjk_epa, ContactId, Manifold, ManifoldPoint,
     MAX_MANIFOLD_POINTS,
 };
-pub use sat::{PairCache, SatAxis};
+pub use sat::{PairCache, SatAxis, SAT_TOLERANCE};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
 pub(crate) use gjk::distance_in_a;

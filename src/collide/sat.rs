@@ -79,14 +79,16 @@ use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold
 use crate::math::{scalar, Iso, Mat3, Vec3};
 use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_FACES};
 
-/// Relative tolerance of the axis choice: B's best face must separate more than A's, and
-/// the best edge pair more than the best face, by `SAT_TOLERANCE · scale` (m) to be
-/// chosen, with `scale = |t|∞ + extent(A) + extent(B)` (`t` B's position in A's frame, the
-/// extent the largest core coordinate). For 1 m shapes about 3e-5 m: a hundred times the
+/// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
+/// [`super::contact`]): B's best face must separate more than A's, and the best edge pair
+/// more than the best face, by `SAT_TOLERANCE · scale` (m) to be chosen, with
+/// `scale = |t|∞ + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
+/// largest core coordinate; for a hull, its build tolerance over
+/// [`crate::shape::ConvexHull::TOLERANCE`]). For 1 m shapes about 3e-5 m: a hundred times the
 /// rounding of a separation (about 1e-7 of the scale), so resting contacts keep their
 /// reference face and normal through rounding and solver jitter, and small enough that a
 /// face chosen over a slightly better axis stays within 1e-4 m of the true depth.
-pub(crate) const SAT_TOLERANCE: f32 = 1.0e-5;
+pub const SAT_TOLERANCE: f32 = 1.0e-5;
 
 /// Edge pairs whose directions make an angle with `sin θ` below this (about 0.06°) are
 /// skipped: their cross product is then dominated by rounding, and the face axes at the
@@ -1114,8 +1116,9 @@ fn box_query(
 /// the radius.
 ///
 /// - A box face axis: the segment clipped against the face's side planes, up to 2 points
-///   (one when the segment stands on the face: the far end is beyond the margin), each the
-///   segment point and its projection on the face.
+///   (one when the segment stands on the face: the far end is beyond the margin): the
+///   capsule's surface point facing the face at each clipped segment point (end cap or
+///   cylinder) and the segment point's projection on the face.
 /// - An edge axis: one point from the closest points of the segment and the box edge.
 ///
 /// With the same guard and fallback as the polytope pairs.
@@ -1182,9 +1185,12 @@ pub(crate) fn capsule_cuboid(
     if !face.separation.is_finite() {
         return SatOutcome::Fallback;
     }
+    // The cores' separation by the six axes: positive means the segment is apart from the
+    // box (a lower bound of their distance).
+    let core_separation = edge.map_or(face.separation, |(_, _, s)| scalar::max(s, face.separation));
     // Rotation of the box frame into A's.
     let to_a = |p: Vec3| b_in_a.transform_point(p);
-    match edge {
+    let outcome = match edge {
         Some((k, n, s)) if s > face.separation + tol => {
             // The box's edge along axis k that supports n.
             let (_, Some(e)) = box_edge_along(b, k, n) else {
@@ -1193,24 +1199,26 @@ pub(crate) fn capsule_cuboid(
             let (ts, te) = segment_closest_points(p0, p1, e.p0, e.p1);
             let inside = ts > 0.0 && ts < 1.0 && te > 0.0 && te < 1.0;
             if s > 0.0 && !inside {
-                return SatOutcome::Fallback;
-            }
-            let on_segment = p0 + d * ts;
-            let on_box = e.p0 + (e.p1 - e.p0) * te;
-            let normal = b_in_a.transform_vector(-n);
-            let id = ContactId {
-                a: feature_at(ts),
-                b: FeatureId::edge(e.v0, e.v1),
-            };
-            out.reset(normal);
-            out.push_within(
-                Candidate::new(to_a(on_segment - n * r), to_a(on_box), normal, id),
-                margin,
-            );
-            if out.len > 0 {
-                SatOutcome::Contact
-            } else {
+                // Apart, and a segment end or an edge end is the closest: see below.
                 SatOutcome::Fallback
+            } else {
+                let on_segment = p0 + d * ts;
+                let on_box = e.p0 + (e.p1 - e.p0) * te;
+                let normal = b_in_a.transform_vector(-n);
+                let id = ContactId {
+                    a: feature_at(ts),
+                    b: FeatureId::edge(e.v0, e.v1),
+                };
+                out.reset(normal);
+                out.push_within(
+                    Candidate::new(to_a(on_segment - n * r), to_a(on_box), normal, id),
+                    margin,
+                );
+                if out.len > 0 {
+                    SatOutcome::Contact
+                } else {
+                    SatOutcome::Fallback
+                }
             }
         }
         _ => {
@@ -1226,6 +1234,13 @@ pub(crate) fn capsule_cuboid(
             );
             let normal = b_in_a.transform_vector(-nf);
             let f0 = f.vertices[0];
+            // The capsule's surface point facing the face at a segment point: on the end
+            // cap, along −n, when n points out past that end of the segment; else on the
+            // cylinder, along the part of n perpendicular to the segment (a tilted
+            // capsule's middle is `r cos α` above its axis, not `r`).
+            let along = nf.dot(d);
+            let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
+            let cylinder = across.normalize_or(nf);
             out.reset(normal);
             for v in clipped.vertices() {
                 // Height (m) of the segment point above the face plane.
@@ -1234,7 +1249,10 @@ pub(crate) fn capsule_cuboid(
                     a: v.inc_id,
                     b: v.ref_id,
                 };
-                let point_a = to_a(v.point - nf * r);
+                let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
+                    || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
+                let toward_face = if past_end { nf } else { cylinder };
+                let point_a = to_a(v.point - toward_face * r);
                 let point_b = to_a(v.point - nf * height);
                 out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
             }
@@ -1245,6 +1263,91 @@ pub(crate) fn capsule_cuboid(
                 SatOutcome::Fallback
             }
         }
+    };
+    if outcome == SatOutcome::Fallback && core_separation > 0.0 {
+        // Apart, but closest at a box vertex or a segment end the axes do not name.
+        return segment_box_apart(c, b, (p0, p1), b_in_a, margin, out);
+    }
+    outcome
+}
+
+/// A capsule whose core segment `p0 → p1` (box frame) is apart from box `b`: the exact
+/// closest points, the nearest of each segment end against the box (the end clamped to
+/// the box) and the segment against each of the 12 box edges (Ericson 5.1.9). When the
+/// two are apart their closest pair is one of those: an end over a face, edge or vertex,
+/// or an inner segment point against an edge or a vertex (an edge's end). One point, along
+/// the closest points' direction; ids (segment feature, box face, edge or vertex).
+fn segment_box_apart(
+    c: &Capsule,
+    b: &Cuboid,
+    (p0, p1): (Vec3, Vec3),
+    b_in_a: &Iso,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let h = b.half_extents;
+    let d = p1 - p0;
+    let clamp = |p: Vec3| {
+        Vec3::new(
+            scalar::clamp(p.x, -h.x, h.x),
+            scalar::clamp(p.y, -h.y, h.y),
+            scalar::clamp(p.z, -h.z, h.z),
+        )
+    };
+    // (squared gap, segment parameter, segment point, box point, box feature); ends first,
+    // then edges in index order, strict `<`.
+    let mut best: Option<(f32, f32, Vec3, Vec3, FeatureId)> = None;
+    let mut consider = |t: f32, on_segment: Vec3, on_box: Vec3, feature: FeatureId| {
+        let gap2 = (on_segment - on_box).length_squared();
+        if best.is_none_or(|(g, ..)| gap2 < g) {
+            best = Some((gap2, t, on_segment, on_box, feature));
+        }
+    };
+    for (t, p) in [(0.0, p0), (1.0, p1)] {
+        consider(t, p, clamp(p), super::analytic::clamped_feature(p, h));
+    }
+    for e in 0..12 {
+        let Some(edge) = Polytope::edge(b, e) else {
+            continue;
+        };
+        let (s, u) = segment_closest_points(p0, p1, edge.p0, edge.p1);
+        let feature = match feature_at(u) {
+            f if f == FeatureId::vertex(0) => FeatureId::vertex(edge.v0),
+            f if f == FeatureId::vertex(1) => FeatureId::vertex(edge.v1),
+            _ => FeatureId::edge(edge.v0, edge.v1),
+        };
+        consider(s, p0 + d * s, edge.p0 + (edge.p1 - edge.p0) * u, feature);
+    }
+    let Some((_, t, on_segment, on_box, feature)) = best else {
+        return SatOutcome::Fallback;
+    };
+    let Some((n, gap)) = (on_segment - on_box).normalize_and_length() else {
+        return SatOutcome::Fallback;
+    };
+    let r = c.radius;
+    let within = gap - r <= margin; // false for NaN too
+    if !within {
+        return SatOutcome::Separated;
+    }
+    let normal = b_in_a.transform_vector(-n);
+    let id = ContactId {
+        a: feature_at(t),
+        b: feature,
+    };
+    out.reset(normal);
+    out.push_within(
+        Candidate::new(
+            b_in_a.transform_point(on_segment - n * r),
+            b_in_a.transform_point(on_box),
+            normal,
+            id,
+        ),
+        margin,
+    );
+    if out.len > 0 {
+        SatOutcome::Contact
+    } else {
+        SatOutcome::Fallback
     }
 }
 
