@@ -77,7 +77,7 @@ use super::analytic::{feature_at, segment_closest_points};
 use super::clip;
 use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold};
 use crate::math::{scalar, Iso, Mat3, Vec3};
-use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_FACES};
+use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES, MAX_HULL_FACES};
 
 /// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
 /// [`super::contact`]): B's best face must separate more than A's, and the best edge pair
@@ -220,8 +220,8 @@ pub(crate) trait Polytope {
     fn face_count(&self) -> usize;
     /// Face `f`'s outward unit normal and offset (`n · p = d` on the face).
     fn plane(&self, f: usize) -> (Vec3, f32);
-    /// The vertex furthest along `dir`.
-    fn support(&self, dir: Vec3) -> Vec3;
+    /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
+    fn min_dot(&self, dir: Vec3) -> f32;
     /// Number of edges.
     fn edge_count(&self) -> usize;
     /// Edge `e`, `None` past the last.
@@ -268,8 +268,8 @@ impl Polytope for Cuboid {
     }
 
     #[inline]
-    fn support(&self, dir: Vec3) -> Vec3 {
-        self.core_support(dir).0
+    fn min_dot(&self, dir: Vec3) -> f32 {
+        dir.dot(self.core_support(-dir).0)
     }
 
     fn edge_count(&self) -> usize {
@@ -339,8 +339,8 @@ impl Polytope for ConvexHull {
     }
 
     #[inline]
-    fn support(&self, dir: Vec3) -> Vec3 {
-        self.core_support(dir).0
+    fn min_dot(&self, dir: Vec3) -> f32 {
+        ConvexHull::min_dot(self, dir)
     }
 
     fn edge_count(&self) -> usize {
@@ -445,8 +445,7 @@ fn choose(face_a: FaceBest, face_b: FaceBest, edge: Option<EdgeBest>, tol: f32) 
 fn face_a_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, f: usize) -> f32 {
     let (n, d) = a.plane(f);
     let n_b = fr.inv_vector(n);
-    let p = b.support(-n_b);
-    n_b.dot(p) + n.dot(fr.t) - d
+    b.min_dot(n_b) + n.dot(fr.t) - d
 }
 
 /// Separation along face `g` of B: A's support along `−m` above B's plane, which is
@@ -455,8 +454,7 @@ fn face_a_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, f: usiz
 fn face_b_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, g: usize) -> f32 {
     let (m_b, e) = b.plane(g);
     let m = fr.vector(m_b);
-    let p = a.support(-m);
-    m.dot(p) - m.dot(fr.t) - e
+    a.min_dot(m) - m.dot(fr.t) - e
 }
 
 /// A's edge seen from B's frame, for the Gauss-map test: its arc's normals and its vector.
@@ -524,17 +522,17 @@ fn edge_axis(p1: Vec3, e1: Vec3, c1: Vec3, p2: Vec3, e2: Vec3, c2: Vec3) -> Opti
     Some((n, n.dot(p2 - p1)))
 }
 
-/// The edge pair `(arc, eb)`: its axis and separation when it spans a face of `D`;
-/// `cba`, `dba` are B's two face normals dotted with A's edge (B's frame).
+/// The edge pair of `arc` and B's edge from `p0_b` along `e_b` (B's frame): its axis and
+/// separation when it spans a face of `D`; `cba`, `dba` are B's two face normals dotted
+/// with A's edge (B's frame).
 #[inline]
 fn edge_pair(
     arc: &ArcA,
-    eb: &PolyEdge,
+    (p0_b, e_b): (Vec3, Vec3),
     (cba, dba): (f32, f32),
     fr: &Frame,
     centers: (Vec3, Vec3),
 ) -> Option<(Vec3, f32)> {
-    let e_b = eb.p1 - eb.p0;
     if !is_minkowski_face(arc, cba, dba, e_b) {
         return None;
     }
@@ -542,7 +540,7 @@ fn edge_pair(
         arc.edge.p0,
         arc.vector,
         centers.0,
-        fr.point(eb.p0),
+        fr.point(p0_b),
         fr.vector(e_b),
         centers.1,
     )
@@ -590,28 +588,52 @@ fn query<A: Polytope, B: Polytope>(
     }
     let centers = (a.center(), fr.point(b.center()));
     let mut edge: Option<EdgeBest> = None;
+    // B's edges once: start, vector and faces (B's frame).
+    // (index, start, vector, face along, face against).
+    let mut edges_b: heapless::Vec<(u8, Vec3, Vec3, u8, u8), MAX_HULL_EDGES> = heapless::Vec::new();
+    for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
+        let (Some(e), Some((f0, f1))) = (b.edge(ib), b.edge_faces(ib)) else {
+            continue;
+        };
+        // Cannot be full: at most MAX_HULL_EDGES edges.
+        let _ = edges_b.push((ib as u8, e.p0, e.p1 - e.p0, f0 as u8, f1 as u8));
+    }
     // B's face normals dotted with the current A edge (B's frame): the first triple
-    // product of every B edge is a look-up, and most pairs stop there.
+    // product of every B edge is a look-up, and most pairs stop there. The pairs that
+    // pass it are collected without a branch (which one passes is data), then tested.
+    // Tables indexed by a byte: every look-up is in range.
     let faces_b = b.face_count().min(MAX_HULL_FACES);
-    let mut dots = [0.0f32; MAX_HULL_FACES];
+    let mut dots = [0.0f32; 256];
+    let mut passing = [0u8; 256];
+    let mut pairs_b = [(0u8, 0u8); MAX_HULL_EDGES];
+    for (slot, e) in pairs_b.iter_mut().zip(edges_b.iter()) {
+        *slot = (e.3, e.4);
+    }
+    let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
     for ia in 0..a.edge_count() {
         let Some(ea) = a.edge(ia) else { continue };
         let arc = ArcA::new(ea, fr);
         for (g, d) in dots.iter_mut().enumerate().take(faces_b) {
             *d = b.plane(g).0.dot(arc.vector_b);
         }
-        for ib in 0..b.edge_count() {
-            let Some((f0, f1)) = b.edge_faces(ib) else {
+        let mut count = 0usize;
+        for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
+            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
+            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
+            let straddles = cba * dba < 0.0; // false for NaN too
+            if let Some(slot) = passing.get_mut(count & 0xff) {
+                *slot = k as u8;
+            }
+            count += straddles as usize;
+        }
+        for &k in passing.iter().take(count) {
+            let Some(&(ib, p0_b, e_b, f0, f1)) = edges_b.get(k as usize) else {
                 continue;
             };
-            let cba = dots.get(f0).copied().unwrap_or(0.0);
-            let dba = dots.get(f1).copied().unwrap_or(0.0);
-            let straddles = cba * dba < 0.0; // false for NaN too
-            if !straddles {
-                continue;
-            }
-            let Some(eb) = b.edge(ib) else { continue };
-            let Some((normal, s)) = edge_pair(&arc, &eb, (cba, dba), fr, centers) else {
+            let ib = ib as usize;
+            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
+            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
+            let Some((normal, s)) = edge_pair(&arc, (p0_b, e_b), (cba, dba), fr, centers) else {
                 continue;
             };
             if s > margin {
@@ -656,7 +678,8 @@ fn cached_separates<A: Polytope, B: Polytope>(
             // The same products as `query`'s look-up table: B's face normals (the
             // edge's `n0`, `n1` are those normals) dotted with A's edge.
             let dots = (eb.n0.dot(arc.vector_b), eb.n1.dot(arc.vector_b));
-            edge_pair(&arc, &eb, dots, fr, centers).is_some_and(|(_, s)| s > margin)
+            let edge_b = (eb.p0, eb.p1 - eb.p0);
+            edge_pair(&arc, edge_b, dots, fr, centers).is_some_and(|(_, s)| s > margin)
         }
     }
 }

@@ -306,6 +306,36 @@ impl ConvexHull {
         (self.core_vertex(i as u32), i as u32)
     }
 
+    /// The smallest `v · dir` over the vertices (`+∞` for none; NaN products are
+    /// skipped): the same number as `dir · v` for the vertex [`ConvexHull::core_support`]
+    /// picks along `−dir`, bit for bit (the products only change sign), without finding
+    /// the vertex. Four running minima, merged at the end.
+    pub(crate) fn min_dot(&self, dir: Vec3) -> f32 {
+        #[inline(always)]
+        fn take(best: &mut f32, d: f32) {
+            *best = if d < *best { d } else { *best };
+        }
+        let vs = self.vertices();
+        let (mut l0, mut l1, mut l2, mut l3) =
+            (f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::INFINITY);
+        let mut chunks = vs.chunks_exact(4);
+        for c in chunks.by_ref() {
+            if let [v0, v1, v2, v3] = c {
+                take(&mut l0, v0.dot(dir));
+                take(&mut l1, v1.dot(dir));
+                take(&mut l2, v2.dot(dir));
+                take(&mut l3, v3.dot(dir));
+            }
+        }
+        for v in chunks.remainder() {
+            take(&mut l0, v.dot(dir));
+        }
+        take(&mut l0, l1);
+        take(&mut l2, l3);
+        take(&mut l0, l2);
+        l0
+    }
+
     pub(crate) fn core_vertex(&self, index: u32) -> Vec3 {
         let vs = self.vertices();
         vs.get(index as usize)
