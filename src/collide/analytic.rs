@@ -262,37 +262,24 @@ pub(crate) fn sphere_cuboid(
 }
 
 /// The box feature under a point `p` outside the box `|x| <= h` (box frame): the face,
-/// edge or vertex where `p`'s clamped coordinates put its closest point.
+/// edge or vertex where `p`'s clamped coordinates put its closest point. Computed from
+/// bit masks without branching on the (random) pattern of clamped coordinates.
 pub(crate) fn clamped_feature(p: Vec3, h: Vec3) -> FeatureId {
-    // Per axis: 0 inside the slab, 1 below, 2 above.
-    let side = |x: f32, hk: f32| {
-        if x > hk {
-            2u32
-        } else if x < -hk {
-            1
-        } else {
-            0
-        }
-    };
-    let sides = [side(p.x, h.x), side(p.y, h.y), side(p.z, h.z)];
-    let clamped = sides.iter().filter(|&&s| s != 0).count();
-    // Vertex bits of the clamped coordinates (bit k set on the positive side).
-    let mut bits = 0u32;
-    let mut free = 0usize;
-    for (k, &s) in sides.iter().enumerate() {
-        if s == 2 {
-            bits |= 1 << k;
-        } else if s == 0 {
-            free = k;
-        }
-    }
-    match clamped {
-        3 => FeatureId::vertex(bits),
-        2 => FeatureId::edge(bits, bits | (1 << free)),
-        _ => {
-            let k = sides.iter().position(|&s| s != 0).unwrap_or(0);
-            FeatureId::face((2 * k) as u32 + (sides.get(k) == Some(&2)) as u32)
-        }
+    // Bit k: coordinate k beyond +h_k (`above`) or clamped at all (`clamped`).
+    let above = (p.x > h.x) as u32 | ((p.y > h.y) as u32) << 1 | ((p.z > h.z) as u32) << 2;
+    let below = (p.x < -h.x) as u32 | ((p.y < -h.y) as u32) << 1 | ((p.z < -h.z) as u32) << 2;
+    let clamped = above | below;
+    // Three clamped: the vertex `above`. Two: the edge along the free axis, from the vertex
+    // with that bit clear. One: the face on the clamped axis (`2k` below, `2k + 1` above).
+    let free = !clamped & 7;
+    let face_axis = clamped.trailing_zeros() & 3;
+    let vertex = FeatureId::vertex(above);
+    let edge = FeatureId::edge(above, above | free);
+    let face = FeatureId::face(2 * face_axis + ((above >> face_axis) & 1));
+    match clamped.count_ones() {
+        3 => vertex,
+        2 => edge,
+        _ => face,
     }
 }
 
@@ -581,4 +568,56 @@ fn deepest_four(normal: Vec3, candidates: &[Candidate]) -> Option<LocalManifold>
         }
     }
     m.non_empty()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The box feature by cases: vertex, edge or face from the clamped coordinates.
+    fn feature_by_cases(p: Vec3, h: Vec3) -> FeatureId {
+        let side = |x: f32, hk: f32| {
+            if x > hk {
+                2u32
+            } else if x < -hk {
+                1
+            } else {
+                0
+            }
+        };
+        let sides = [side(p.x, h.x), side(p.y, h.y), side(p.z, h.z)];
+        let bits = (0..3)
+            .filter(|&k| sides[k] == 2)
+            .map(|k| 1u32 << k)
+            .sum::<u32>();
+        match sides.iter().filter(|&&s| s != 0).count() {
+            3 => FeatureId::vertex(bits),
+            2 => {
+                let free = (0..3).find(|&k| sides[k] == 0).unwrap();
+                FeatureId::edge(bits, bits | (1 << free))
+            }
+            _ => {
+                let k = (0..3).find(|&k| sides[k] != 0).unwrap();
+                FeatureId::face(2 * k as u32 + (sides[k] == 2) as u32)
+            }
+        }
+    }
+
+    #[test]
+    fn clamped_feature_names_the_face_edge_or_vertex() {
+        let mut rng = SplitMix64::new(41);
+        let h = Vec3::new(0.5, 0.7, 0.3);
+        for _ in 0..20000 {
+            let p = Vec3::new(
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+            );
+            if (p.abs() - h).max_elem() <= 0.0 {
+                continue; // inside: not this function's case
+            }
+            assert_eq!(clamped_feature(p, h), feature_by_cases(p, h), "{p:?}");
+        }
+    }
 }

@@ -547,7 +547,10 @@ fn edge_pair(
 }
 
 /// The full test: `Err(axis)` when `axis` separates the shapes by more than `margin`, else
-/// the best face of each shape and the best edge pair.
+/// the best face of each shape and the best edge pair. Work: `F_A + F_B` support values,
+/// `E_A (F_B + E_B)` cheap products and look-ups, the full Gauss-map test on the pairs that
+/// pass the first product only. Stack: B's edge list and the look-up tables, about 7 KiB
+/// at most (sized for the largest hull; box–box never comes here).
 fn query<A: Polytope, B: Polytope>(
     a: &A,
     b: &B,
