@@ -1,8 +1,11 @@
-//! Closed forms: sphere, capsule and half-space pairs. They also serve as test oracles.
+//! Closed forms: sphere, capsule and half-space pairs, sphere against box. They also serve
+//! as test oracles.
 
-use super::manifold::{Candidate, ContactId, LocalManifold, MAX_MANIFOLD_POINTS};
+use super::manifold::{
+    Candidate, ContactId, LocalManifold, Manifold, ManifoldPoint, MAX_MANIFOLD_POINTS,
+};
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::{Capsule, FeatureId, HalfSpace, Shape, Sphere, MAX_HULL_VERTICES};
+use crate::shape::{Capsule, Cuboid, FeatureId, HalfSpace, Shape, Sphere, MAX_HULL_VERTICES};
 
 /// Closest points between segments `p1–q1` and `p2–q2`: returns `(s, t)` with the points
 /// `p1 + s (q1 − p1)` and `p2 + t (q2 − p2)`, `s, t ∈ [0, 1]`. Degenerate segments
@@ -109,7 +112,7 @@ pub(crate) fn segment_feature(c: &Capsule, p: Vec3) -> FeatureId {
 }
 
 /// The feature of a segment at parameter `t ∈ [0, 1]`.
-fn feature_at(t: f32) -> FeatureId {
+pub(crate) fn feature_at(t: f32) -> FeatureId {
     if t <= END_TOLERANCE {
         FeatureId::vertex(0)
     } else if t >= 1.0 - END_TOLERANCE {
@@ -155,6 +158,129 @@ pub(crate) fn sphere_sphere(
         margin,
     );
     m.non_empty()
+}
+
+/// Sphere `a` at `pose_a` against box `b` at `pose_b` (world frame, unit rotations), in
+/// closed form in the box's frame, where the box is `|x| <= h`: the sphere's centre is moved
+/// into that frame once and the answer out of it once (this pair skips the A-frame round
+/// trip of the other pairs). The centre `p` is clamped to the box, `q = clamp(p, −h, h)`:
+///
+/// - centre outside (`p ≠ q`): the closest point of the box is `q`, the normal from the
+///   sphere towards the box `(q − p) / |q − p|`, the separation `|p − q| − r`; the box's
+///   feature is the face, edge or vertex on which `q` lies (one, two or three coordinates
+///   clamped);
+/// - centre inside or on the surface: the face of least penetration, the smallest of the
+///   six distances `h_k ∓ p_k` (first in face order on ties), with the normal into that
+///   face, the separation `−(h_k ∓ p_k) − r`, and the centre's projection on that face.
+///
+/// One point, written to `out`: the sphere's surface point along the normal and the box
+/// point. False (and `out` unspecified) when apart by more than `margin` or when a number
+/// is not finite.
+pub(crate) fn sphere_cuboid(
+    a: &Sphere,
+    pose_a: &Iso,
+    b: &Cuboid,
+    pose_b: &Iso,
+    margin: f32,
+    out: &mut Manifold,
+) -> bool {
+    let p = pose_b.inverse_transform_point(pose_a.position);
+    let h = b.half_extents;
+    let q = Vec3::new(
+        scalar::clamp(p.x, -h.x, h.x),
+        scalar::clamp(p.y, -h.y, h.y),
+        scalar::clamp(p.z, -h.z, h.z),
+    );
+    let r = a.radius;
+    // Box frame: `outward` from the box towards the centre, `on_box` the box point.
+    let (outward, on_box, separation, feature) = match (p - q).normalize_and_length() {
+        Some((outward, gap)) => {
+            let sep = gap - r;
+            let within = sep <= margin; // false for NaN too
+            if !within {
+                return false;
+            }
+            (outward, q, sep, clamped_feature(p, h))
+        }
+        None => {
+            // Inside: faces in order −X, +X, −Y, +Y, −Z, +Z; distance to each.
+            let mut best = (0usize, h.x + p.x);
+            for f in 1..6 {
+                let k = f / 2;
+                let d = if f % 2 == 1 { h[k] - p[k] } else { h[k] + p[k] };
+                if d < best.1 {
+                    best = (f, d);
+                }
+            }
+            let (f, depth) = best;
+            let s = if f % 2 == 1 { 1.0 } else { -1.0 };
+            let mut outward = Vec3::ZERO;
+            let mut on_box = p;
+            match f / 2 {
+                0 => {
+                    outward.x = s;
+                    on_box.x = s * h.x;
+                }
+                1 => {
+                    outward.y = s;
+                    on_box.y = s * h.y;
+                }
+                _ => {
+                    outward.z = s;
+                    on_box.z = s * h.z;
+                }
+            }
+            (outward, on_box, -depth - r, FeatureId::face(f as u32))
+        }
+    };
+    // World frame, from the sphere towards the box.
+    let normal = pose_b.transform_vector(-outward);
+    let on_sphere = normal * r;
+    let point = ManifoldPoint {
+        point_a: pose_a.position + on_sphere,
+        point_b: pose_b.transform_point(on_box),
+        local_a: pose_a.inverse_transform_vector(on_sphere),
+        local_b: on_box,
+        separation,
+        id: ContactId {
+            a: FeatureId::vertex(0),
+            b: feature,
+        },
+    };
+    let finite = normal.is_finite()
+        && point.point_a.is_finite()
+        && point.point_b.is_finite()
+        && point.local_a.is_finite()
+        && separation.is_finite();
+    if !finite {
+        return false;
+    }
+    out.normal = normal;
+    out.points[0] = point;
+    out.len = 1;
+    true
+}
+
+/// The box feature under a point `p` outside the box `|x| <= h` (box frame): the face,
+/// edge or vertex where `p`'s clamped coordinates put its closest point. Computed from
+/// bit masks without branching on the (random) pattern of clamped coordinates.
+pub(crate) fn clamped_feature(p: Vec3, h: Vec3) -> FeatureId {
+    // Bit k: coordinate k beyond +h_k (`above`) or clamped at all (`clamped`).
+    let above = (p.x > h.x) as u32 | ((p.y > h.y) as u32) << 1 | ((p.z > h.z) as u32) << 2;
+    let below = (p.x < -h.x) as u32 | ((p.y < -h.y) as u32) << 1 | ((p.z < -h.z) as u32) << 2;
+    let clamped = above | below;
+    // Three clamped: the vertex `above`. Two: the edge along the free axis, from the vertex
+    // with that bit clear. One: the face on the clamped axis (`2k` below, `2k + 1` above).
+    let free = !clamped & 7;
+    let face_axis = clamped.trailing_zeros() & 3;
+    let vertex = FeatureId::vertex(above);
+    let edge = FeatureId::edge(above, above | free);
+    let face = FeatureId::face(2 * face_axis + ((above >> face_axis) & 1));
+    match clamped.count_ones() {
+        3 => vertex,
+        2 => edge,
+        _ => face,
+    }
 }
 
 /// Sphere `a` at A's origin, capsule `b` at `b_in_a`: the sphere against the closest point
@@ -442,4 +568,56 @@ fn deepest_four(normal: Vec3, candidates: &[Candidate]) -> Option<LocalManifold>
         }
     }
     m.non_empty()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The box feature by cases: vertex, edge or face from the clamped coordinates.
+    fn feature_by_cases(p: Vec3, h: Vec3) -> FeatureId {
+        let side = |x: f32, hk: f32| {
+            if x > hk {
+                2u32
+            } else if x < -hk {
+                1
+            } else {
+                0
+            }
+        };
+        let sides = [side(p.x, h.x), side(p.y, h.y), side(p.z, h.z)];
+        let bits = (0..3)
+            .filter(|&k| sides[k] == 2)
+            .map(|k| 1u32 << k)
+            .sum::<u32>();
+        match sides.iter().filter(|&&s| s != 0).count() {
+            3 => FeatureId::vertex(bits),
+            2 => {
+                let free = (0..3).find(|&k| sides[k] == 0).unwrap();
+                FeatureId::edge(bits, bits | (1 << free))
+            }
+            _ => {
+                let k = (0..3).find(|&k| sides[k] != 0).unwrap();
+                FeatureId::face(2 * k as u32 + (sides[k] == 2) as u32)
+            }
+        }
+    }
+
+    #[test]
+    fn clamped_feature_names_the_face_edge_or_vertex() {
+        let mut rng = SplitMix64::new(41);
+        let h = Vec3::new(0.5, 0.7, 0.3);
+        for _ in 0..20000 {
+            let p = Vec3::new(
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+                rng.range(-1.5, 1.5),
+            );
+            if (p.abs() - h).max_elem() <= 0.0 {
+                continue; // inside: not this function's case
+            }
+            assert_eq!(clamped_feature(p, h), feature_by_cases(p, h), "{p:?}");
+        }
+    }
 }

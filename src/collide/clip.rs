@@ -40,41 +40,35 @@ pub(crate) struct ClipVertex {
     seg_inc: FeatureId,
 }
 
-const EMPTY_VERTEX: ClipVertex = ClipVertex {
-    point: Vec3::ZERO,
-    ref_id: FeatureId(0),
-    inc_id: FeatureId(0),
-    seg_ref_edge: NO_EDGE,
-    seg_inc: FeatureId(0),
-};
-
-/// A clipped polygon (or polyline): at most [`MAX_CLIP_POINTS`] vertices in order.
-#[derive(Clone, Copy, Debug)]
+/// A clipped polygon (or polyline): at most [`MAX_CLIP_POINTS`] vertices in order. The
+/// storage is not initialised up front (a `heapless::Vec`), so an empty polygon costs
+/// nothing to make.
+#[derive(Clone, Debug)]
 pub(crate) struct ClipPolygon {
-    len: usize,
-    vertices: [ClipVertex; MAX_CLIP_POINTS],
+    vertices: heapless::Vec<ClipVertex, MAX_CLIP_POINTS>,
 }
 
 impl ClipPolygon {
     const fn new() -> ClipPolygon {
         ClipPolygon {
-            len: 0,
-            vertices: [EMPTY_VERTEX; MAX_CLIP_POINTS],
+            vertices: heapless::Vec::new(),
         }
     }
 
     /// Append a vertex; ignored when full (cannot happen for faces within
     /// `MAX_FACE_VERTICES`, see [`MAX_CLIP_POINTS`]).
     fn push(&mut self, v: ClipVertex) {
-        if let Some(slot) = self.vertices.get_mut(self.len) {
-            *slot = v;
-            self.len += 1;
-        }
+        // A full polygon hands the vertex back: dropped, as documented.
+        let _ = self.vertices.push(v);
     }
 
     /// The vertices in use.
     pub fn vertices(&self) -> &[ClipVertex] {
-        self.vertices.get(..self.len).unwrap_or(&[])
+        &self.vertices
+    }
+
+    fn is_empty(&self) -> bool {
+        self.vertices.is_empty()
     }
 }
 
@@ -86,7 +80,12 @@ fn side_plane(reference: &Face, k: usize) -> (Vec3, Vec3) {
     let verts = reference.points();
     let n = verts.len();
     let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
-    let v1 = verts.get((k + 1) % n.max(1)).copied().unwrap_or(v0);
+    let next = if k + 1 < n {
+        verts.get(k + 1)
+    } else {
+        verts.first()
+    };
+    let v1 = next.copied().unwrap_or(v0);
     ((v1 - v0).cross(reference.normal), v0)
 }
 
@@ -100,9 +99,11 @@ fn reference_feature(reference: &Face, seg_ref_edge: u8, k: usize) -> FeatureId 
         return edge_k;
     }
     let j = seg_ref_edge as usize;
-    let corner = if (j + 1) % n == k {
+    // (i + 1) mod n for i < n, without a division.
+    let succ = |i: usize| if i + 1 >= n { 0 } else { i + 1 };
+    let corner = if succ(j) == k {
         reference.vertex_ids.get(k)
-    } else if (k + 1) % n == j {
+    } else if succ(k) == j {
         reference.vertex_ids.get(j)
     } else {
         None
@@ -119,117 +120,162 @@ fn crossing(p: Vec3, q: Vec3, dp: f32, dq: f32) -> Vec3 {
     p + (q - p) * t
 }
 
-/// Clip `input` against reference side plane `k`, keeping the part with `d <= 0`
-/// (Sutherland–Hodgman, 1974). A point is made only where a segment crosses the plane
-/// strictly, so a vertex lying on the plane is not doubled. `closed` says whether the last
-/// vertex joins the first (a polygon) or not (a segment).
+/// Clip `input` against reference side plane `k` into `out` (emptied first), keeping the
+/// part with `d <= 0` (Sutherland–Hodgman, 1974). A point is made only where a segment
+/// crosses the plane strictly, so a vertex lying on the plane is not doubled. `closed`
+/// says whether the last vertex joins the first (a polygon) or not (a segment).
 fn clip_by_side_plane(
     input: &ClipPolygon,
+    out: &mut ClipPolygon,
     reference: &Face,
     k: usize,
     incident_face: FeatureId,
     closed: bool,
-) -> ClipPolygon {
+) {
     let (s, v0) = side_plane(reference, k);
-    let mut out = ClipPolygon::new();
+    out.vertices.clear();
     let verts = input.vertices();
     let n = verts.len();
+    // Every vertex's signed distance, once.
+    let mut d = [0.0f32; MAX_CLIP_POINTS];
+    for (di, v) in d.iter_mut().zip(verts) {
+        *di = s.dot(v.point - v0);
+    }
+    // Segments i → i + 1; the closing one only for a polygon.
+    let segments = if closed && n > 2 {
+        n
+    } else {
+        n.saturating_sub(1)
+    };
     for (i, p) in verts.iter().enumerate() {
-        let dp = s.dot(p.point - v0);
+        let dp = d.get(i).copied().unwrap_or(0.0);
         if dp <= 0.0 {
             out.push(*p);
         }
-        let next = if i + 1 < n {
-            verts.get(i + 1)
-        } else if closed && n > 2 {
-            verts.first()
-        } else {
-            None
-        };
-        let Some(q) = next else { continue };
-        let dq = s.dot(q.point - v0);
+        if i >= segments {
+            continue;
+        }
+        let j = if i + 1 < n { i + 1 } else { 0 };
+        let dq = d.get(j).copied().unwrap_or(0.0);
         let exits = dp < 0.0 && dq > 0.0;
         let enters = dp > 0.0 && dq < 0.0;
-        if exits || enters {
-            let ref_id = reference_feature(reference, p.seg_ref_edge, k);
-            let (seg_ref_edge, seg_inc) = if exits {
-                // From here the clipped boundary runs along side plane k, inside the
-                // incident polygon, until it re-enters.
-                (k as u8, incident_face)
-            } else {
-                (p.seg_ref_edge, p.seg_inc)
-            };
-            out.push(ClipVertex {
-                point: crossing(p.point, q.point, dp, dq),
-                ref_id,
-                inc_id: p.seg_inc,
-                seg_ref_edge,
-                seg_inc,
+        if !(exits || enters) {
+            continue;
+        }
+        let Some(q) = verts.get(j) else { continue };
+        let ref_id = reference_feature(reference, p.seg_ref_edge, k);
+        let (seg_ref_edge, seg_inc) = if exits {
+            // From here the clipped boundary runs along side plane k, inside the
+            // incident polygon, until it re-enters.
+            (k as u8, incident_face)
+        } else {
+            (p.seg_ref_edge, p.seg_inc)
+        };
+        out.push(ClipVertex {
+            point: crossing(p.point, q.point, dp, dq),
+            ref_id,
+            inc_id: p.seg_inc,
+            seg_ref_edge,
+            seg_inc,
+        });
+    }
+}
+
+/// Two clipping buffers the side planes alternate between; making one costs nothing
+/// (the storage is not initialised), and the result is borrowed from it, never copied.
+#[derive(Debug)]
+pub(crate) struct ClipBuffers {
+    front: ClipPolygon,
+    back: ClipPolygon,
+}
+
+impl ClipBuffers {
+    /// Empty buffers.
+    pub(crate) const fn new() -> ClipBuffers {
+        ClipBuffers {
+            front: ClipPolygon::new(),
+            back: ClipPolygon::new(),
+        }
+    }
+
+    /// Clip the incident polygon against the side planes of the reference face (both in
+    /// the same frame). The result lies on the incident polygon, inside the reference
+    /// face's prism; points are not yet filtered by depth. A 1-vertex incident face gives
+    /// that vertex when it is inside; a 2-vertex one is clipped as a segment.
+    pub(crate) fn polygon(&mut self, reference: &Face, incident: &Face) -> &ClipPolygon {
+        self.front.vertices.clear();
+        let m = (incident.len as usize).min(MAX_FACE_VERTICES);
+        for k in 0..m {
+            self.front.push(ClipVertex {
+                point: incident.vertices.get(k).copied().unwrap_or(Vec3::ZERO),
+                ref_id: reference.id,
+                inc_id: incident.vertex_ids.get(k).copied().unwrap_or(incident.id),
+                seg_ref_edge: NO_EDGE,
+                seg_inc: incident.edge_ids.get(k).copied().unwrap_or(incident.id),
             });
         }
+        self.run(reference, incident.id, m > 2)
     }
-    out
-}
 
-/// Clip the incident polygon against the side planes of the reference face (both in the
-/// same frame). The result lies on the incident polygon, inside the reference face's prism;
-/// points are not yet filtered by depth. A 1-vertex incident face gives that vertex when it
-/// is inside; a 2-vertex one is clipped as a segment.
-pub(crate) fn clip_polygon(reference: &Face, incident: &Face) -> ClipPolygon {
-    let mut poly = ClipPolygon::new();
-    let m = (incident.len as usize).min(MAX_FACE_VERTICES);
-    for k in 0..m {
-        poly.push(ClipVertex {
-            point: incident.vertices.get(k).copied().unwrap_or(Vec3::ZERO),
-            ref_id: reference.id,
-            inc_id: incident.vertex_ids.get(k).copied().unwrap_or(incident.id),
-            seg_ref_edge: NO_EDGE,
-            seg_inc: incident.edge_ids.get(k).copied().unwrap_or(incident.id),
-        });
-    }
-    clip_against_face(poly, reference, incident.id, m > 2)
-}
-
-/// Clip the segment `p0 → p1` (ids `vertex_ids`, edge id `edge_id`) against the side
-/// planes of the reference face: at most 2 points.
-pub(crate) fn clip_segment(
-    reference: &Face,
-    p0: Vec3,
-    p1: Vec3,
-    vertex_ids: [FeatureId; 2],
-    edge_id: FeatureId,
-) -> ClipPolygon {
-    let mut poly = ClipPolygon::new();
-    for (p, id) in [(p0, vertex_ids[0]), (p1, vertex_ids[1])] {
-        poly.push(ClipVertex {
-            point: p,
-            ref_id: reference.id,
-            inc_id: id,
-            seg_ref_edge: NO_EDGE,
-            seg_inc: edge_id,
-        });
-    }
-    clip_against_face(poly, reference, edge_id, false)
-}
-
-/// Run every side plane of `reference` over `poly` in edge order.
-fn clip_against_face(
-    mut poly: ClipPolygon,
-    reference: &Face,
-    incident_face: FeatureId,
-    closed: bool,
-) -> ClipPolygon {
-    let planes = (reference.len as usize).min(MAX_FACE_VERTICES);
-    if planes < 3 {
-        return poly;
-    }
-    for k in 0..planes {
-        poly = clip_by_side_plane(&poly, reference, k, incident_face, closed);
-        if poly.len == 0 {
-            break;
+    /// Clip the segment `p0 → p1` (ids `vertex_ids`, edge id `edge_id`) against the side
+    /// planes of the reference face: at most 2 points.
+    pub(crate) fn segment(
+        &mut self,
+        reference: &Face,
+        p0: Vec3,
+        p1: Vec3,
+        vertex_ids: [FeatureId; 2],
+        edge_id: FeatureId,
+    ) -> &ClipPolygon {
+        self.front.vertices.clear();
+        for (p, id) in [(p0, vertex_ids[0]), (p1, vertex_ids[1])] {
+            self.front.push(ClipVertex {
+                point: p,
+                ref_id: reference.id,
+                inc_id: id,
+                seg_ref_edge: NO_EDGE,
+                seg_inc: edge_id,
+            });
         }
+        self.run(reference, edge_id, false)
     }
-    poly
+
+    /// Run every side plane of `reference` over the front buffer in edge order, back and
+    /// forth between the two buffers.
+    fn run(&mut self, reference: &Face, incident_face: FeatureId, closed: bool) -> &ClipPolygon {
+        let planes = (reference.len as usize).min(MAX_FACE_VERTICES);
+        if planes < 3 {
+            return &self.front;
+        }
+        let mut k = 0;
+        while k < planes {
+            clip_by_side_plane(
+                &self.front,
+                &mut self.back,
+                reference,
+                k,
+                incident_face,
+                closed,
+            );
+            k += 1;
+            if k == planes || self.back.is_empty() {
+                return &self.back;
+            }
+            clip_by_side_plane(
+                &self.back,
+                &mut self.front,
+                reference,
+                k,
+                incident_face,
+                closed,
+            );
+            k += 1;
+            if self.front.is_empty() {
+                break;
+            }
+        }
+        &self.front
+    }
 }
 
 /// The feature of `face` (a polygon, segment or point in the caller's frame) nearest to
@@ -409,7 +455,8 @@ mod tests {
         // two edge crossings on each side.
         let reference = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 0.0), false);
         let incident = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, 1.0, 1.0), true);
-        let out = clip_polygon(&reference, &incident);
+        let mut bufs = ClipBuffers::new();
+        let out = bufs.polygon(&reference, &incident);
         let pts: Vec<Vec3> = out.vertices().iter().map(|v| v.point).collect();
         assert_eq!(pts.len(), 4, "{pts:?}");
         // The overlap of [-1,1]² and [0,2]² is [0,1]²: corners (0,0), (1,0), (1,1), (0,1).
@@ -449,14 +496,16 @@ mod tests {
         let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
         // Same size, exactly on top: every incident vertex lies on two side planes.
         let incident = top_face(Vec3::ONE, Vec3::new(0.0, 1.0, 0.0), true);
-        let out = clip_polygon(&reference, &incident);
+        let mut bufs = ClipBuffers::new();
+        let out = bufs.polygon(&reference, &incident);
         assert_eq!(out.vertices().len(), 4);
     }
 
     #[test]
     fn segment_clip_cuts_at_the_face_edge() {
         let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
-        let out = clip_segment(
+        let mut bufs = ClipBuffers::new();
+        let out = bufs.segment(
             &reference,
             Vec3::new(0.0, 0.1, 0.0),
             Vec3::new(3.0, 0.1, 0.0),

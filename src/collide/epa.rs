@@ -159,14 +159,8 @@ pub(crate) fn penetration_in_a_capped(
     b_in_a: &Iso,
     caps: EpaCaps,
 ) -> Option<Penetration> {
-    let pa = Proxy {
-        shape: a,
-        pose: Iso::IDENTITY,
-    };
-    let pb = Proxy {
-        shape: b,
-        pose: *b_in_a,
-    };
+    let pa = Proxy::at_origin(a);
+    let pb = Proxy::new(b, *b_in_a);
     let (ra, rb) = (a.radius(), b.radius());
     let p = match (a, b) {
         (Shape::HalfSpace(_), Shape::HalfSpace(_)) => return None,
@@ -177,33 +171,50 @@ pub(crate) fn penetration_in_a_capped(
         _ => {
             let mut cache = SimplexCache::default();
             let core = gjk::gjk_cores(&pa, &pb, &mut cache, MAX_GJK_ITERATIONS);
-            if core.status == GjkStatus::Overlapping {
-                let c = epa_cores(&pa, &pb, &core.simplex, caps);
-                inflated(c, ra, rb)
-            } else {
-                // Cores apart: GJK's answer is exact (an upper bound on the core distance,
-                // so a lower bound on the depth, when GJK hit its cap).
-                let gap = gjk::radius_gap(core.distance, ra, rb);
-                if gap > 0.0 {
-                    return None;
-                }
-                let n = core.normal;
-                Penetration {
-                    depth: -gap,
-                    normal: n,
-                    point_a: core.point_a + n * ra,
-                    point_b: core.point_b - n * rb,
-                    status: if core.status == GjkStatus::IterationLimit {
-                        EpaStatus::IterationLimit
-                    } else {
-                        EpaStatus::Converged
-                    },
-                    iterations: 0,
-                }
-            }
+            return penetration_from_gjk(&pa, &pb, &core, caps);
         }
     };
     Some(sanitized(p, Vec3::ZERO, b_in_a.position))
+}
+
+/// The penetration of two cores (neither a half-space; `pa` at the identity, `pb` at B's
+/// pose in A's frame) from the answer of GJK on them (`core`, run from any cache): when
+/// the cores overlap, EPA seeded with GJK's final simplex, so a caller that already ran
+/// GJK does not run it again; when they are apart, GJK's distance against the radii.
+/// `None` when the full shapes do not overlap. The same answer as [`penetration_in_a`]
+/// when `core` came from a fresh cache.
+pub(crate) fn penetration_from_gjk(
+    pa: &Proxy,
+    pb: &Proxy,
+    core: &gjk::CoreDistance,
+    caps: EpaCaps,
+) -> Option<Penetration> {
+    let (ra, rb) = (pa.shape.radius(), pb.shape.radius());
+    let p = if core.status == GjkStatus::Overlapping {
+        let c = epa_cores(pa, pb, &core.simplex, caps);
+        inflated(c, ra, rb)
+    } else {
+        // Cores apart: GJK's answer is exact (an upper bound on the core distance,
+        // so a lower bound on the depth, when GJK hit its cap).
+        let gap = gjk::radius_gap(core.distance, ra, rb);
+        if gap > 0.0 {
+            return None;
+        }
+        let n = core.normal;
+        Penetration {
+            depth: -gap,
+            normal: n,
+            point_a: core.point_a + n * ra,
+            point_b: core.point_b - n * rb,
+            status: if core.status == GjkStatus::IterationLimit {
+                EpaStatus::IterationLimit
+            } else {
+                EpaStatus::Converged
+            },
+            iterations: 0,
+        }
+    };
+    Some(sanitized(p, Vec3::ZERO, pb.pose.position))
 }
 
 /// The full-shape answer from the cores' answer: depth plus both radii, points moved out
@@ -332,30 +343,33 @@ enum Refused {
     Degenerate,
 }
 
-/// The polytope: fixed arrays, the first `*_count` entries used.
+/// The polytope: fixed-capacity lists (`heapless::Vec`: the storage is not initialised up
+/// front, so a polytope costs nothing to make; it lives on [`epa_cores`]'s stack, about
+/// 6 KiB, and is built there in place).
 struct Polytope {
-    vertices: [SimplexVertex; MAX_EPA_VERTICES],
-    vertex_count: usize,
-    faces: [EpaFace; MAX_EPA_FACES],
-    face_count: usize,
+    vertices: heapless::Vec<SimplexVertex, MAX_EPA_VERTICES>,
+    faces: heapless::Vec<EpaFace, MAX_EPA_FACES>,
 }
 
 impl Polytope {
+    /// An empty polytope.
+    const fn new() -> Polytope {
+        Polytope {
+            vertices: heapless::Vec::new(),
+            faces: heapless::Vec::new(),
+        }
+    }
+
     fn vertex(&self, i: u8) -> SimplexVertex {
         self.vertices.get(i as usize).copied().unwrap_or_default()
     }
 
     fn used_faces(&self) -> &[EpaFace] {
-        self.faces.get(..self.face_count).unwrap_or(&[])
+        &self.faces
     }
 
     fn contains(&self, v: &SimplexVertex) -> bool {
-        let n = self.vertex_count.min(MAX_EPA_VERTICES);
-        self.vertices
-            .get(..n)
-            .unwrap_or(&[])
-            .iter()
-            .any(|u| u.same_as(v))
+        self.vertices.iter().any(|u| u.same_as(v))
     }
 
     /// The face on vertices `i j k` (in that order), or `None` when it has no normal: its
@@ -434,7 +448,7 @@ impl Polytope {
         coplanar: f32,
         tol: f32,
     ) -> Result<(), Refused> {
-        let new_index = self.vertex_count;
+        let new_index = self.vertices.len();
         if new_index >= MAX_EPA_VERTICES {
             return Err(Refused::Full);
         }
@@ -444,8 +458,8 @@ impl Polytope {
         let mut stack = [0u8; MAX_EPA_FACES];
         let mut top = 0;
         // Boundary edges `(i, j)` of the removed region, with the kept face across each.
-        let mut horizon = [(0u8, 0u8, None::<usize>); MAX_HORIZON_EDGES];
-        let mut horizon_len = 0;
+        let mut horizon: heapless::Vec<(u8, u8, Option<usize>), MAX_HORIZON_EDGES> =
+            heapless::Vec::new();
         if let (Some(r), Some(s), Ok(id)) = (
             removed.get_mut(start),
             stack.get_mut(0),
@@ -482,38 +496,38 @@ impl Polytope {
                             return Err(Refused::Full);
                         }
                     }
-                    None => {
-                        let slot = horizon.get_mut(horizon_len).ok_or(Refused::Full)?;
-                        *slot = (i, j, neighbour);
-                        horizon_len += 1;
-                    }
+                    None => horizon.push((i, j, neighbour)).map_err(|_| Refused::Full)?,
                 }
             }
         }
         let removed_count = removed.iter().filter(|r| **r).count();
-        if self.face_count.saturating_sub(removed_count) + horizon_len > MAX_EPA_FACES {
+        if self.faces.len().saturating_sub(removed_count) + horizon.len() > MAX_EPA_FACES {
             return Err(Refused::Full);
         }
-        // Build the new faces first; commit only if all of them are sound.
-        let Some(slot) = self.vertices.get_mut(new_index) else {
-            return Err(Refused::Full);
-        };
-        *slot = w;
+        // Build the new faces first (with `w` in place as vertex `new_index`); commit only
+        // if all of them are sound, else take `w` back out.
+        self.vertices.push(w).map_err(|_| Refused::Full)?;
         let k = new_index as u8;
-        let mut fresh = [EpaFace::default(); MAX_HORIZON_EDGES];
-        for (out, &(i, j, kept)) in fresh.iter_mut().zip(horizon.iter().take(horizon_len)) {
-            let face = self.make_face(i, j, k).ok_or(Refused::Degenerate)?;
-            let folded = kept
-                .and_then(|g| self.faces.get(g))
-                .is_some_and(|g| self.folds_onto(&face, g, tol));
-            if folded {
-                return Err(Refused::Degenerate);
+        let mut fresh: heapless::Vec<EpaFace, MAX_HORIZON_EDGES> = heapless::Vec::new();
+        for &(i, j, kept) in &horizon {
+            let face = self.make_face(i, j, k);
+            let folded = face.is_some_and(|face| {
+                kept.and_then(|g| self.faces.get(g))
+                    .is_some_and(|g| self.folds_onto(&face, g, tol))
+            });
+            match face {
+                Some(face) if !folded => {
+                    // Cannot be full: one new face per horizon edge.
+                    let _ = fresh.push(face);
+                }
+                _ => {
+                    self.vertices.truncate(new_index);
+                    return Err(Refused::Degenerate);
+                }
             }
-            *out = face;
         }
-        self.vertex_count = new_index + 1;
         let mut kept = 0;
-        for f in 0..self.face_count.min(MAX_EPA_FACES) {
+        for f in 0..self.faces.len() {
             if !removed.get(f).copied().unwrap_or(true) {
                 if let Some(face) = self.faces.get(f).copied() {
                     if let Some(dst) = self.faces.get_mut(kept) {
@@ -523,13 +537,11 @@ impl Polytope {
                 }
             }
         }
-        for face in fresh.iter().take(horizon_len) {
-            if let Some(dst) = self.faces.get_mut(kept) {
-                *dst = *face;
-                kept += 1;
-            }
+        self.faces.truncate(kept);
+        for face in &fresh {
+            // Room was checked above: kept + horizon <= MAX_EPA_FACES.
+            let _ = self.faces.push(*face);
         }
-        self.face_count = kept;
         Ok(())
     }
 }
@@ -657,8 +669,9 @@ fn seed(
     Seed::Flat(Vec3::Y)
 }
 
-/// The initial polytope from a tetrahedron: faces wound so their normals point out.
-fn tetrahedron(t: [SimplexVertex; 4]) -> Option<Polytope> {
+/// The initial polytope from a tetrahedron, built in `p` (emptied first): faces wound so
+/// their normals point out. False (and `p` unspecified) when a face has no normal.
+fn tetrahedron(p: &mut Polytope, t: [SimplexVertex; 4]) -> bool {
     let mut t = t;
     let orient = (t[1].w - t[0].w)
         .cross(t[2].w - t[0].w)
@@ -666,26 +679,25 @@ fn tetrahedron(t: [SimplexVertex; 4]) -> Option<Polytope> {
     if orient < 0.0 {
         t.swap(1, 2);
     }
-    let mut p = Polytope {
-        vertices: [SimplexVertex::default(); MAX_EPA_VERTICES],
-        vertex_count: 4,
-        faces: [EpaFace::default(); MAX_EPA_FACES],
-        face_count: 0,
-    };
-    for (dst, src) in p.vertices.iter_mut().zip(t.iter()) {
-        *dst = *src;
+    p.vertices.clear();
+    p.faces.clear();
+    for v in t {
+        // Cannot be full: 4 of MAX_EPA_VERTICES.
+        let _ = p.vertices.push(v);
     }
     // With (w1 − w0) × (w2 − w0) · (w3 − w0) > 0, face 0 1 2 faces w3: reverse it.
     let faces = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]];
     let mut built = [EpaFace::default(); 4];
     for (dst, [i, j, k]) in built.iter_mut().zip(faces) {
-        *dst = p.make_face(i, j, k)?;
+        let Some(face) = p.make_face(i, j, k) else {
+            return false;
+        };
+        *dst = face;
     }
-    for (dst, src) in p.faces.iter_mut().zip(built) {
-        *dst = src;
+    for face in built {
+        let _ = p.faces.push(face);
     }
-    p.face_count = 4;
-    Some(p)
+    true
 }
 
 /// Flip `n` (a direction in `D`) so the normal `−n` points from A's origin to B's.
@@ -718,9 +730,10 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
         }
         Seed::Tetrahedron(t) => t,
     };
-    let Some(mut poly) = tetrahedron(tetra) else {
+    let mut poly = Polytope::new();
+    if !tetrahedron(&mut poly, tetra) {
         return bounded_answer(pa, pb, None, EpaStatus::Degenerate, 0);
-    };
+    }
     let max_vertices = caps.vertices.clamp(4, MAX_EPA_VERTICES);
     // The smallest upper bound h_D(m) seen, with its direction m.
     let mut best: Option<(Vec3, f32)> = None;
@@ -757,7 +770,7 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
             }
             continue;
         }
-        if poly.vertex_count >= max_vertices {
+        if poly.vertices.len() >= max_vertices {
             status = EpaStatus::PolytopeFull;
             break;
         }
@@ -1033,7 +1046,11 @@ mod tests {
         ];
         let t = [0, 1, 2, 3].map(|i| vertex_at(p[i], i as u32));
         let w = vertex_at(Vec3::new(1.0, -1.0e-6, -1.0 + 1.0e-6), 4);
-        let fresh = || tetrahedron(t).unwrap();
+        let fresh = || {
+            let mut p = Polytope::new();
+            assert!(tetrahedron(&mut p, t));
+            p
+        };
         // Positively oriented already: `tetrahedron` keeps the order.
         assert_eq!(fresh().vertex(1).w, p[1]);
         let s = face_on(&fresh(), [1, 2, 3]);
@@ -1041,13 +1058,13 @@ mod tests {
         // points within 1e-6 of a line (area ratio 3e-7): refused, polytope unchanged.
         let mut strict = fresh();
         assert_eq!(strict.expand(s, w, 0.0, 1.0e-5), Err(Refused::Degenerate));
-        assert_eq!((strict.vertex_count, strict.face_count), (4, 4));
+        assert_eq!((strict.vertices.len(), strict.faces.len()), (4, 4));
         // Counting faces within 1e-5 as seen removes G too: p1 drops out (it lies on the
         // segment p0 w within 1e-6), and every vertex is behind every new face (convex,
         // to the 1e-5 the test allowed).
         let mut tolerant = fresh();
         assert_eq!(tolerant.expand(s, w, 1.0e-5, 1.0e-5), Ok(()));
-        assert_eq!((tolerant.vertex_count, tolerant.face_count), (5, 4));
+        assert_eq!((tolerant.vertices.len(), tolerant.faces.len()), (5, 4));
         for f in tolerant.used_faces() {
             assert!(!f.v.contains(&1), "{f:?}");
             for v in tolerant.vertices.iter().take(5) {
@@ -1065,7 +1082,11 @@ mod tests {
             Vec3::new(0.0, 1.0, 1.0),
         ]
         .map(|w| w * 0.5);
-        let mut poly = tetrahedron([0, 1, 2, 3].map(|i| vertex_at(t[i], i as u32))).unwrap();
+        let mut poly = Polytope::new();
+        assert!(tetrahedron(
+            &mut poly,
+            [0, 1, 2, 3].map(|i| vertex_at(t[i], i as u32))
+        ));
         // `tetrahedron` may reorder the vertices: read them back.
         let [v0, v1, v2] = [0, 1, 2].map(|i| poly.vertex(i).w);
         // Vertex 4 1e-7 m off the midpoint of the edge 0–1 (noise level: the
@@ -1073,9 +1094,9 @@ mod tests {
         let off_line = (v1 - v0).any_perpendicular().normalize_or(Vec3::X) * 1.0e-7;
         let extra = [(v0 + v1) * 0.5 + off_line, v2 + Vec3::splat(1.0e-9)];
         for (k, w) in extra.into_iter().enumerate() {
-            poly.vertices[4 + k] = vertex_at(w, 4 + k as u32);
+            assert!(poly.vertices.push(vertex_at(w, 4 + k as u32)).is_ok());
         }
-        poly.vertex_count = 6;
+        assert_eq!(poly.vertices.len(), 6);
         assert!(poly.make_face(0, 4, 1).is_none());
         assert!(poly.make_face(2, 5, 3).is_none());
         // A sound face: normal and distance exact to rounding (1e-6 at this 1 m scale).

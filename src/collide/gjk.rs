@@ -168,29 +168,17 @@ pub(crate) fn distance_in_a_capped(
         }
         (Shape::HalfSpace(h), _) => {
             *cache = SimplexCache::default();
-            let pb = Proxy {
-                shape: b,
-                pose: *b_in_a,
-            };
+            let pb = Proxy::new(b, *b_in_a);
             half_space_vs_core(h.normal, &pb, b.radius())
         }
         (_, Shape::HalfSpace(h)) => {
             *cache = SimplexCache::default();
-            let pa = Proxy {
-                shape: a,
-                pose: Iso::IDENTITY,
-            };
+            let pa = Proxy::at_origin(a);
             core_vs_half_space(&pa, a.radius(), b_in_a.transform_vector(h.normal), b_in_a)
         }
         _ => {
-            let pa = Proxy {
-                shape: a,
-                pose: Iso::IDENTITY,
-            };
-            let pb = Proxy {
-                shape: b,
-                pose: *b_in_a,
-            };
+            let pa = Proxy::at_origin(a);
+            let pb = Proxy::new(b, *b_in_a);
             let core = gjk_cores(&pa, &pb, cache, max_iterations);
             inflate(&core, a.radius(), b.radius())
         }
@@ -206,7 +194,7 @@ pub(crate) fn radius_gap(core_distance: f32, ra: f32, rb: f32) -> f32 {
 }
 
 /// The full-shape answer from the core answer: subtract the radii, move the points.
-fn inflate(core: &CoreDistance, ra: f32, rb: f32) -> DistanceOutput {
+pub(crate) fn inflate(core: &CoreDistance, ra: f32, rb: f32) -> DistanceOutput {
     let (distance, point_a, point_b) = match core.status {
         GjkStatus::Overlapping => (0.0, core.point_a, core.point_b),
         _ => (
@@ -229,7 +217,11 @@ fn inflate(core: &CoreDistance, ra: f32, rb: f32) -> DistanceOutput {
 /// neutral answer, flagged [`GjkStatus::IterationLimit`]. An infinite distance (shapes
 /// further apart than f32 can say) becomes `f32::MAX`, so "apart" stays apart; a NaN
 /// becomes 0. Points that are not finite become `origin_a` and `origin_b` (or zero).
-fn finite_or_fallback(out: DistanceOutput, origin_a: Vec3, origin_b: Vec3) -> DistanceOutput {
+pub(crate) fn finite_or_fallback(
+    out: DistanceOutput,
+    origin_a: Vec3,
+    origin_b: Vec3,
+) -> DistanceOutput {
     let finite = out.distance.is_finite()
         && out.point_a.is_finite()
         && out.point_b.is_finite()

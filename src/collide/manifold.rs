@@ -7,10 +7,17 @@
 //! swapped and flipped by [`flipped`].
 //!
 //! - Closed forms ([`super::analytic`]): sphere and capsule pairs, half-space against
-//!   anything.
-//! - Sphere or capsule against a polytope: GJK on the cores, EPA when the cores overlap;
-//!   a capsule lying on a face is clipped against the face's side planes (2 points).
-//! - Polytope against polytope: the axis from GJK (separated) or EPA (overlapping), then
+//!   anything, sphere against box.
+//! - Box and hull pairs (box–box, box–hull, hull–hull): the separating axis test with the
+//!   pair's cached axis first ([`super::sat`]), the incident face clipped against the
+//!   reference face; capsule against box by the same test on the segment.
+//! - Sphere or capsule against a hull or triangle: GJK on the cores, EPA when the cores
+//!   overlap; a capsule lying on a face is clipped against the face's side planes (2
+//!   points).
+//! - Every other polytope pair (triangles), and the SAT pairs whose closest features the
+//!   test cannot name exactly ([`super::sat::SatOutcome::Fallback`]): the general path,
+//!   also available on its own as [`contact_gjk_epa`]. The axis from GJK (separated) or
+//!   EPA (overlapping, seeded from GJK's simplex, so GJK runs once), then
 //!   the reference face (the supporting face most aligned with the axis, on either shape)
 //!   and the incident face (the other shape's face most anti-aligned with it), clipped
 //!   against each other ([`super::clip`]) and reduced to at most 4 points. The manifold
@@ -21,8 +28,10 @@
 use super::analytic;
 use super::check_pose;
 use super::clip::{self, MAX_CLIP_POINTS};
-use super::gjk::{GjkStatus, SimplexCache};
-use super::{distance_in_a, penetration_in_a};
+use super::epa;
+use super::gjk::{self, GjkStatus, SimplexCache, MAX_GJK_ITERATIONS};
+use super::sat::{self, PairCache, SatOutcome};
+use super::Proxy;
 use crate::error::{non_negative, Error, Input};
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::{Capsule, Face, FeatureId, Shape};
@@ -123,7 +132,51 @@ impl Manifold {
 /// closer than `margin` metres (the speculative margin; penetrating points always count),
 /// or `None` when the shapes are further apart than `margin`. Two half-spaces never touch.
 /// Fails on an invalid pose or a negative or non-finite margin.
+///
+/// The same as [`contact_cached`] with a fresh cache.
 pub fn contact(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+) -> Result<Option<Manifold>, Error> {
+    contact_cached(a, pose_a, b, pose_b, margin, &mut PairCache::default())
+}
+
+/// [`contact`] for a pair queried again and again (once per step): box and hull pairs try
+/// the axis in `cache` first and store the axis the test ended on (see [`PairCache`]). The
+/// result never depends on the cache: a fresh, stale or garbage cache gives the same
+/// manifold, bit for bit; only the time differs. Fails like [`contact`].
+pub fn contact_cached(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+) -> Result<Option<Manifold>, Error> {
+    check_pose(pose_a)?;
+    check_pose(pose_b)?;
+    non_negative(margin, Input::Distance)?;
+    // Built where it is returned: a manifold is about 256 bytes, and copying it into the
+    // result cost a fifth of a sphere-box query.
+    let mut result = Ok(Some(Manifold::default()));
+    let found = match &mut result {
+        Ok(Some(m)) => dispatch(a, pose_a, b, pose_b, margin, Route::Fast(cache), m),
+        _ => false,
+    };
+    if !found {
+        result = Ok(None);
+    }
+    result
+}
+
+/// The general path of [`contact`] for every pair, without the separating axis test and
+/// the sphere–box and capsule–box closed forms: GJK, EPA when the shapes overlap, then
+/// face clipping or one point (module docs). Slower; kept as the reference the fast paths
+/// are tested against. Fails like [`contact`].
+pub fn contact_gjk_epa(
     a: &Shape,
     pose_a: &Iso,
     b: &Shape,
@@ -133,7 +186,9 @@ pub fn contact(
     check_pose(pose_a)?;
     check_pose(pose_b)?;
     non_negative(margin, Input::Distance)?;
-    Ok(contact_unchecked(a, pose_a, b, pose_b, margin))
+    let mut m = Manifold::default();
+    let found = dispatch(a, pose_a, b, pose_b, margin, Route::General, &mut m);
+    Ok(found.then_some(m))
 }
 
 /// A contact point under construction, in A's frame.
@@ -207,23 +262,37 @@ impl LocalManifold {
     /// [`clip::reduce_to_four`]; `None` when there are none.
     pub fn from_candidates(normal: Vec3, candidates: &[Candidate]) -> Option<LocalManifold> {
         let mut m = LocalManifold::new(normal);
+        m.fill_from_candidates(normal, candidates).then_some(m)
+    }
+
+    /// [`LocalManifold::from_candidates`] in place: `self` is reset to `normal` and filled;
+    /// false when there are no candidates.
+    pub fn fill_from_candidates(&mut self, normal: Vec3, candidates: &[Candidate]) -> bool {
+        self.normal = normal;
+        self.len = 0;
         if candidates.len() <= MAX_MANIFOLD_POINTS {
             for c in candidates {
-                m.push_within(*c, f32::INFINITY);
+                self.push_within(*c, f32::INFINITY);
             }
         } else {
             let (chosen, count) = clip::reduce_to_four(candidates, normal);
             for &i in chosen.iter().take(count) {
                 if let Some(c) = candidates.get(i) {
-                    m.push_within(*c, f32::INFINITY);
+                    self.push_within(*c, f32::INFINITY);
                 }
             }
         }
-        m.non_empty()
+        self.len > 0
+    }
+
+    /// Reset to an empty manifold with the given normal.
+    pub fn reset(&mut self, normal: Vec3) {
+        self.normal = normal;
+        self.len = 0;
     }
 
     /// The smallest separation (m); `+∞` when empty.
-    fn min_separation(&self) -> f32 {
+    pub fn min_separation(&self) -> f32 {
         let mut s = f32::INFINITY;
         for c in self.points() {
             s = scalar::min(s, c.separation);
@@ -242,12 +311,48 @@ pub(crate) fn contact_unchecked(
     pose_b: &Iso,
     margin: f32,
 ) -> Option<Manifold> {
-    let pose_a = Iso::new(pose_a.position, pose_a.rotation.normalize());
-    let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
+    contact_cached_unchecked(a, pose_a, b, pose_b, margin, &mut PairCache::default())
+}
+
+/// [`contact_cached`] without input checks (as [`contact_unchecked`]).
+pub(crate) fn contact_cached_unchecked(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+) -> Option<Manifold> {
+    let mut m = Manifold::default();
+    dispatch(a, pose_a, b, pose_b, margin, Route::Fast(cache), &mut m).then_some(m)
+}
+
+/// Which narrow phase runs: the fast paths (with the pair's cache) or the general one.
+enum Route<'c> {
+    Fast(&'c mut PairCache),
+    General,
+}
+
+/// Put the pair in canonical order, run it, flip back; the manifold is written to `out`
+/// (true when there is one). Written through one `&mut` rather than returned level by
+/// level: a manifold is about 300 bytes.
+fn dispatch(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    route: Route,
+    out: &mut Manifold,
+) -> bool {
     if order_rank(b) < order_rank(a) {
-        contact_ordered(b, &pose_b, a, &pose_a, margin).map(|m| flipped(&m))
+        let found = contact_ordered(b, pose_b, a, pose_a, margin, route, out);
+        if found {
+            flip(out);
+        }
+        found
     } else {
-        contact_ordered(a, &pose_a, b, &pose_b, margin)
+        contact_ordered(a, pose_a, b, pose_b, margin, route, out)
     }
 }
 
@@ -262,54 +367,142 @@ fn order_rank(s: &Shape) -> u8 {
     }
 }
 
-/// The manifold of a pair already in canonical order, in the world frame.
+/// The manifold of a pair already in canonical order, in the world frame. Rotations are
+/// renormalised first: A's, and the relative rotation `b_in_a` (or B's own, when B's pose
+/// is used as it is).
 fn contact_ordered(
     a: &Shape,
     pose_a: &Iso,
     b: &Shape,
     pose_b: &Iso,
     margin: f32,
-) -> Option<Manifold> {
-    let b_in_a = pose_a.inv_mul(pose_b);
+    mut route: Route,
+    out: &mut Manifold,
+) -> bool {
+    let unit_a = pose_a.rotation.normalize();
+    if let (Shape::Sphere(s), Shape::Cuboid(c), Route::Fast(cache)) = (a, b, &mut route) {
+        // Closed form in the box's frame, world frame in and out (no A-frame round trip).
+        **cache = PairCache::default();
+        let pose_a = Iso::new(pose_a.position, unit_a);
+        let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
+        return analytic::sphere_cuboid(s, &pose_a, c, &pose_b, margin, out);
+    }
+    // B in A's frame: the relative rotation `qa* qb` from the given rotations, renormalised
+    // (so its scale does not wait for A's renormalisation), the position by A's unit one.
+    let b_in_a = Iso::new(
+        unit_a.inverse_rotate(pose_b.position - pose_a.position),
+        (pose_a.rotation.conjugate() * pose_b.rotation).normalize(),
+    );
+    let pose_a = &Iso::new(pose_a.position, unit_a);
     // Fallback normal for coincident centres or crossing segments: world +Y.
-    let up_in_a = pose_a
-        .inverse_transform_vector(Vec3::Y)
-        .normalize_or(Vec3::Y);
-    let local = match (a, b) {
-        (Shape::HalfSpace(plane), _) => analytic::half_space_contact(plane, b, &b_in_a, margin),
-        (Shape::Sphere(sa), Shape::Sphere(sb)) => {
-            analytic::sphere_sphere(sa, sb, &b_in_a, up_in_a, margin)
-        }
-        (Shape::Sphere(sa), Shape::Capsule(cb)) => {
-            analytic::sphere_capsule(sa, cb, &b_in_a, up_in_a, margin)
-        }
-        (Shape::Capsule(ca), Shape::Capsule(cb)) => {
-            analytic::capsule_capsule(ca, cb, &b_in_a, up_in_a, margin)
-        }
-        (Shape::Sphere(_) | Shape::Capsule(_), _) => round_vs_polytope(a, b, &b_in_a, margin),
-        _ => polytope_vs_polytope(a, b, &b_in_a, margin),
-    }?;
-    to_world(&local, pose_a, &b_in_a, margin)
+    let up_in_a = || {
+        pose_a
+            .inverse_transform_vector(Vec3::Y)
+            .normalize_or(Vec3::Y)
+    };
+    let mut local = LocalManifold::new(Vec3::Y);
+    let outcome = match route {
+        Route::Fast(cache) => fast_path(a, b, &b_in_a, margin, cache, &mut local),
+        Route::General => SatOutcome::Fallback,
+    };
+    match outcome {
+        SatOutcome::Separated => return false,
+        SatOutcome::Contact => {}
+        SatOutcome::Fallback => match general(a, b, &b_in_a, up_in_a, margin) {
+            Some(m) => local = m,
+            None => return false,
+        },
+    }
+    to_world(&local, pose_a, &b_in_a, margin, out)
 }
 
-/// Move an A-frame manifold into the world: normal and points by `pose_a`, B's local
-/// points by `b_in_a⁻¹`. Points with a non-finite coordinate or a separation beyond
-/// `margin` are dropped; `None` when nothing is left or the normal is not a unit vector.
-fn to_world(local: &LocalManifold, pose_a: &Iso, b_in_a: &Iso, margin: f32) -> Option<Manifold> {
-    let (normal, _) = pose_a
-        .transform_vector(local.normal)
-        .normalize_and_length()?;
-    let mut m = Manifold {
-        normal,
-        ..Manifold::default()
+/// The general path of a pair in canonical order (module docs), in A's frame: closed
+/// forms for half-spaces and round pairs, GJK/EPA for the rest. `up_in_a` gives the
+/// fallback normal (world +Y) where a closed form needs one.
+fn general(
+    a: &Shape,
+    b: &Shape,
+    b_in_a: &Iso,
+    up_in_a: impl Fn() -> Vec3,
+    margin: f32,
+) -> Option<LocalManifold> {
+    match (a, b) {
+        (Shape::HalfSpace(plane), _) => analytic::half_space_contact(plane, b, b_in_a, margin),
+        (Shape::Sphere(sa), Shape::Sphere(sb)) => {
+            analytic::sphere_sphere(sa, sb, b_in_a, up_in_a(), margin)
+        }
+        (Shape::Sphere(sa), Shape::Capsule(cb)) => {
+            analytic::sphere_capsule(sa, cb, b_in_a, up_in_a(), margin)
+        }
+        (Shape::Capsule(ca), Shape::Capsule(cb)) => {
+            analytic::capsule_capsule(ca, cb, b_in_a, up_in_a(), margin)
+        }
+        (Shape::Sphere(_) | Shape::Capsule(_), _) => round_vs_polytope(a, b, b_in_a, margin),
+        _ => polytope_vs_polytope(a, b, b_in_a, margin),
+    }
+}
+
+/// The fast paths of a pair in canonical order (sphere–box is taken before, in
+/// [`contact_ordered`]): capsule–box and the box and hull pairs by the separating axis
+/// test, the manifold written to `out`; [`SatOutcome::Fallback`] for every other pair and
+/// when a test cannot answer exactly. The cache is used by the box and hull pairs only,
+/// and reset for every other pair.
+fn fast_path(
+    a: &Shape,
+    b: &Shape,
+    b_in_a: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let closed = |h: &crate::shape::ConvexHull| h.is_closed();
+    match (a, b) {
+        (Shape::Cuboid(ca), Shape::Cuboid(cb)) => sat::cuboids(ca, cb, b_in_a, margin, cache, out),
+        (Shape::Cuboid(ca), Shape::Hull(hb)) if closed(hb) => {
+            sat::polytopes(ca, *hb, b_in_a, margin, cache, out)
+        }
+        (Shape::Hull(ha), Shape::Cuboid(cb)) if closed(ha) => {
+            sat::polytopes(*ha, cb, b_in_a, margin, cache, out)
+        }
+        (Shape::Hull(ha), Shape::Hull(hb)) if closed(ha) && closed(hb) => {
+            sat::polytopes(*ha, *hb, b_in_a, margin, cache, out)
+        }
+        _ => {
+            *cache = PairCache::default();
+            match (a, b) {
+                (Shape::Capsule(c), Shape::Cuboid(cb)) => {
+                    sat::capsule_cuboid(c, cb, b_in_a, margin, out)
+                }
+                _ => SatOutcome::Fallback,
+            }
+        }
+    }
+}
+
+/// Move an A-frame manifold into the world, into `m`: normal and points by `pose_a`, B's
+/// local points by `b_in_a⁻¹`. Points with a non-finite coordinate or a separation beyond
+/// `margin` are dropped; false when nothing is left or the normal is not a unit vector.
+fn to_world(
+    local: &LocalManifold,
+    pose_a: &Iso,
+    b_in_a: &Iso,
+    margin: f32,
+    m: &mut Manifold,
+) -> bool {
+    let Some((normal, _)) = pose_a.transform_vector(local.normal).normalize_and_length() else {
+        return false;
     };
+    m.normal = normal;
+    // Rotation matrices: a manifold moves up to 12 points and vectors.
+    let ra = sat::rotation_matrix(pose_a.rotation);
+    let rb = sat::rotation_matrix(b_in_a.rotation);
     let mut len = 0usize;
     for c in local.points() {
         let p = ManifoldPoint {
-            point_a: pose_a.transform_point(c.point_a),
-            point_b: pose_a.transform_point(c.point_b),
+            point_a: ra.mul_vec(c.point_a) + pose_a.position,
+            point_b: ra.mul_vec(c.point_b) + pose_a.position,
             local_a: c.point_a,
-            local_b: b_in_a.inverse_transform_point(c.point_b),
+            local_b: rb.transpose_mul_vec(c.point_b - b_in_a.position),
             separation: c.separation,
             id: c.id,
         };
@@ -325,14 +518,14 @@ fn to_world(local: &LocalManifold, pose_a: &Iso, b_in_a: &Iso, margin: f32) -> O
         }
     }
     m.len = len as u8;
-    (len > 0).then_some(m)
+    len > 0
 }
 
-/// The manifold of (B, A) from the one of (A, B): normal negated, the two sides of every
-/// point (world points, local points, feature ids) swapped; separations unchanged.
-fn flipped(m: &Manifold) -> Manifold {
-    let mut out = *m;
-    out.normal = -m.normal;
+/// The manifold of (B, A) from the one of (A, B), in place: normal negated, the two sides
+/// of every point (world points, local points, feature ids) swapped; separations
+/// unchanged.
+pub(crate) fn flip(out: &mut Manifold) {
+    out.normal = -out.normal;
     for p in out.points.iter_mut() {
         *p = ManifoldPoint {
             point_a: p.point_b,
@@ -346,7 +539,6 @@ fn flipped(m: &Manifold) -> Manifold {
             },
         };
     }
-    out
 }
 
 /// The contact axis of two shapes in A's frame: unit normal from A to B, the signed
@@ -361,9 +553,20 @@ struct Axis {
 
 /// GJK on the cores; when they are further apart than `margin`, `None`; when the full
 /// shapes overlap (or touch), EPA. Written so that a NaN from either gives `None`.
+///
+/// GJK runs once: its answer gives the distance (as [`super::distance`] would) and its
+/// final simplex seeds EPA (as [`super::penetration`] would, which runs the same GJK
+/// again), so both answers are the public queries' to the bit.
 fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
+    let pa = Proxy::at_origin(a);
+    let pb = Proxy::new(b, *b_in_a);
     let mut cache = SimplexCache::default();
-    let d = distance_in_a(a, b, b_in_a, &mut cache);
+    let core = gjk::gjk_cores(&pa, &pb, &mut cache, MAX_GJK_ITERATIONS);
+    let d = gjk::finite_or_fallback(
+        gjk::inflate(&core, a.radius(), b.radius()),
+        Vec3::ZERO,
+        b_in_a.position,
+    );
     if d.status != GjkStatus::Overlapping && d.distance > 0.0 {
         let within = d.distance <= margin; // false for NaN too
         if !within {
@@ -377,7 +580,7 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
             point_b: d.point_b,
         });
     }
-    match penetration_in_a(a, b, b_in_a) {
+    match epa::penetration_from_gjk(&pa, &pb, &core, epa::EpaCaps::DEFAULT) {
         Some(p) => {
             let (normal, _) = p.normal.normalize_and_length()?;
             finite_axis(Axis {
@@ -470,7 +673,8 @@ fn capsule_on_face(c: &Capsule, face: &Face, axis: &Axis, margin: f32) -> Option
         return None;
     }
     let (s0, s1) = c.segment();
-    let clipped = clip::clip_segment(
+    let mut buffers = clip::ClipBuffers::new();
+    let clipped = buffers.segment(
         face,
         s0,
         s1,
@@ -531,15 +735,37 @@ fn face_contact(
         (*face_b, a.supporting_face(-face_b.normal), cos_b)
     };
     let aligned = cos >= FACE_CONTACT_MIN_COS; // false for NaN too
-    if reference.len < 3 || !aligned {
+    if !aligned {
         return None;
     }
-    let clipped = clip::clip_polygon(&reference, &incident);
+    let mut m = LocalManifold::new(axis.normal);
+    let found = clipped_face_manifold(&reference, &incident, reference_is_a, margin, &mut m);
+    (found && plausible(&m, axis)).then_some(m)
+}
+
+/// The face manifold of a reference face and an incident face (both in A's frame; the
+/// reference on A when `reference_is_a`): the incident face clipped against the reference
+/// face's side planes, every point within `margin` of the reference plane paired with its
+/// projection on it, reduced to at most 4 ([`LocalManifold::from_candidates`]). The
+/// normal is the reference face's (turned from A towards B); ids pair the reference and
+/// incident features of each point. Written to `out`; false when the reference face is
+/// not a polygon or nothing is within the margin.
+pub(crate) fn clipped_face_manifold(
+    reference: &Face,
+    incident: &Face,
+    reference_is_a: bool,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> bool {
+    if reference.len < 3 {
+        return false;
+    }
+    let mut buffers = clip::ClipBuffers::new();
+    let clipped = buffers.polygon(reference, incident);
     let nr = reference.normal;
     let r0 = reference.vertices[0];
     let normal = if reference_is_a { nr } else { -nr };
-    let mut candidates = [Candidate::default(); MAX_CLIP_POINTS];
-    let mut count = 0usize;
+    let mut candidates: heapless::Vec<Candidate, MAX_CLIP_POINTS> = heapless::Vec::new();
     for v in clipped.vertices() {
         // Signed height (m) of the incident point above the reference plane.
         let h = (v.point - r0).dot(nr);
@@ -561,11 +787,8 @@ fn face_contact(
             };
             Candidate::new(v.point, on_reference, normal, id)
         };
-        if let Some(slot) = candidates.get_mut(count) {
-            *slot = c;
-            count += 1;
-        }
+        // Cannot be full: one candidate per clipped vertex.
+        let _ = candidates.push(c);
     }
-    let m = LocalManifold::from_candidates(normal, candidates.get(..count).unwrap_or(&[]))?;
-    plausible(&m, axis).then_some(m)
+    out.fill_from_candidates(normal, &candidates)
 }

@@ -5,6 +5,40 @@ use super::{Face, FeatureId, MassProperties, Ray, RayHit};
 use crate::error::{finite_vec, Error, Input};
 use crate::math::{scalar, Mat3, Vec3};
 
+/// The corners of face `2 axis + positive` (vertex indices), counter-clockwise about its
+/// outward normal: with `u = axis + 1`, `w = axis + 2` (mod 3), the corners in `(u, w)`
+/// signs `(−, −), (+, −), (+, +), (−, +)` for a positive face, reversed for a negative one.
+const FACE_CORNERS: [[u8; 4]; 6] = face_corners();
+
+const fn face_corners() -> [[u8; 4]; 6] {
+    let mut out = [[0u8; 4]; 6];
+    let mut f = 0;
+    while f < 6 {
+        let axis = f / 2;
+        let positive = f % 2 == 1;
+        let (u, w) = ((axis + 1) % 3, (axis + 2) % 3);
+        let signs = [(false, false), (true, false), (true, true), (false, true)];
+        let mut k = 0;
+        while k < 4 {
+            let (su, sw) = if positive { signs[k] } else { signs[3 - k] };
+            let mut id = 0u8;
+            if positive {
+                id |= 1 << axis;
+            }
+            if su {
+                id |= 1 << u;
+            }
+            if sw {
+                id |= 1 << w;
+            }
+            out[f][k] = id;
+            k += 1;
+        }
+        f += 1;
+    }
+    out
+}
+
 /// A box with half-extents along local X, Y and Z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -70,40 +104,22 @@ impl Cuboid {
         self.face(axis, positive)
     }
 
-    /// Face on `axis` (0, 1, 2) on the positive or negative side, counter-clockwise.
+    /// Face on `axis` (0, 1, 2) on the positive or negative side, counter-clockwise about
+    /// its outward normal; corners from [`FACE_CORNERS`].
     pub(crate) fn face(&self, axis: usize, positive: bool) -> Face {
-        let u = (axis + 1) % 3;
-        let w = (axis + 2) % 3;
-        let mut normal = Vec3::ZERO;
+        let axis = axis.min(2);
         let s = if positive { 1.0 } else { -1.0 };
+        let mut normal = Vec3::ZERO;
         set(&mut normal, axis, s);
-        let face_index = (2 * axis + positive as usize) as u32;
-        let mut f = Face::new(normal, FeatureId::face(face_index));
-        // Corners in (u, w) signs, counter-clockwise about +axis; reversed for −axis.
-        let mut corners = [(false, false), (true, false), (true, true), (false, true)];
-        if !positive {
-            corners.reverse();
-        }
-        let mut ids = [0u32; 4];
-        for (k, &(su, sw)) in corners.iter().enumerate() {
-            let mut idx = 0u32;
-            if positive {
-                idx |= 1 << axis;
-            }
-            if su {
-                idx |= 1 << u;
-            }
-            if sw {
-                idx |= 1 << w;
-            }
-            ids[k] = idx;
-        }
-        for k in 0..4 {
-            let next = ids[(k + 1) % 4];
+        let face_index = 2 * axis + positive as usize;
+        let mut f = Face::new(normal, FeatureId::face(face_index as u32));
+        let corners = FACE_CORNERS.get(face_index).copied().unwrap_or([0; 4]);
+        for (k, &id) in corners.iter().enumerate() {
+            let next = corners.get((k + 1) & 3).copied().unwrap_or(id);
             f.push(
-                self.core_vertex(ids[k]),
-                FeatureId::vertex(ids[k]),
-                FeatureId::edge(ids[k], next),
+                self.core_vertex(id as u32),
+                FeatureId::vertex(id as u32),
+                FeatureId::edge(id as u32, next as u32),
             );
         }
         f

@@ -22,11 +22,13 @@ pub const MAX_HULL_VERTICES: usize = 64;
 pub const MAX_HULL_FACES: usize = 2 * MAX_HULL_VERTICES - 4;
 /// Most polygon corners over all faces (twice the edge bound `3V − 6`).
 pub const MAX_HULL_FACE_INDICES: usize = 2 * (3 * MAX_HULL_VERTICES - 6);
+/// Most edges a hull keeps: a polyhedron of `V` vertices has at most `3V − 6`.
+pub const MAX_HULL_EDGES: usize = 3 * MAX_HULL_VERTICES - 6;
 /// Most points [`ConvexHull::new`] accepts.
 pub const MAX_HULL_INPUT_POINTS: usize = 1024;
 
 /// A convex polytope. Build it with [`ConvexHull::new`]; it is plain data, `Copy`, and about
-/// 3.5 KiB.
+/// 4.2 KiB.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConvexHull {
     /// Vertices (local frame, m); the first `vertex_count` are used.
@@ -41,6 +43,15 @@ pub struct ConvexHull {
     pub(crate) face_len: [u8; MAX_HULL_FACES],
     pub(crate) face_count: u8,
     pub(crate) face_indices: [u8; MAX_HULL_FACE_INDICES],
+    /// Edges between faces that are not coplanar, `[v0, v1, face0, face1]` with `v0 < v1`,
+    /// `face0` the face that runs `v0 → v1` counter-clockwise, `face1` the one that runs
+    /// `v1 → v0` (see [`HullEdge`]); the first `edge_count` are used, in the order of
+    /// their first corner. The seams of a face split into fan pieces are left out.
+    pub(crate) edges: [[u8; 4]; MAX_HULL_EDGES],
+    pub(crate) edge_count: u8,
+    /// True when every corner's edge found the face on its other side (always, for a
+    /// closed mesh): the edge list is complete and the separating axis test may use it.
+    pub(crate) closed: bool,
     /// Centroid of the volume (local frame).
     pub(crate) centroid: Vec3,
     /// The distance tolerance the hull was built with (m).
@@ -48,6 +59,23 @@ pub struct ConvexHull {
     /// True when the cloud needed more than [`MAX_HULL_VERTICES`] vertices and the hull
     /// keeps the greedy subset described at [`ConvexHull::new`].
     pub(crate) reduced: bool,
+}
+
+/// One edge of a hull between two faces that are not coplanar: its end vertices
+/// `v0 < v1` and the faces on either side. `face0` runs along `v0 → v1` counter-clockwise
+/// about its normal, `face1` along `v1 → v0`, so `normal(face1) × normal(face0)` points
+/// along `v0 − v1`: the edge vector stands in for that cross product in the separating
+/// axis test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct HullEdge {
+    /// Lower vertex index.
+    pub v0: u8,
+    /// Higher vertex index.
+    pub v1: u8,
+    /// Face along `v0 → v1`.
+    pub face0: u8,
+    /// Face along `v1 → v0`.
+    pub face1: u8,
 }
 
 /// A hull with nothing in it, filled by the builder.
@@ -60,6 +88,9 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     face_len: [0; MAX_HULL_FACES],
     face_count: 0,
     face_indices: [0; MAX_HULL_FACE_INDICES],
+    edges: [[0; 4]; MAX_HULL_EDGES],
+    edge_count: 0,
+    closed: false,
     centroid: Vec3::ZERO,
     tolerance: 0.0,
     reduced: false,
@@ -172,6 +203,50 @@ impl ConvexHull {
         self.reduced
     }
 
+    /// Number of edges (see [`HullEdge`]).
+    pub(crate) fn edge_count(&self) -> usize {
+        (self.edge_count as usize).min(MAX_HULL_EDGES)
+    }
+
+    /// Edge `e`, or `None` past the last.
+    #[inline]
+    pub(crate) fn edge(&self, e: usize) -> Option<HullEdge> {
+        if e >= self.edge_count() {
+            return None;
+        }
+        let [v0, v1, face0, face1] = *self.edges.get(e)?;
+        Some(HullEdge {
+            v0,
+            v1,
+            face0,
+            face1,
+        })
+    }
+
+    /// True when the edge list is complete (see [`ConvexHull::closed`]).
+    pub(crate) fn is_closed(&self) -> bool {
+        self.closed
+    }
+
+    /// Face `f` as a polygon with feature ids (local frame); out-of-range indices give
+    /// face 0.
+    pub(crate) fn face(&self, f: usize) -> Face {
+        let f = if f < self.face_count() { f } else { 0 };
+        let (normal, _) = self.plane(f);
+        let mut face = Face::new(normal, FeatureId::face(f as u32));
+        let idx = self.face_vertices(f);
+        let next = idx.iter().skip(1).chain(idx.first());
+        for (&i, &j) in idx.iter().zip(next) {
+            let (i, j) = (i as u32, j as u32);
+            face.push(
+                self.core_vertex(i),
+                FeatureId::vertex(i),
+                FeatureId::edge(i, j),
+            );
+        }
+        face
+    }
+
     /// The face planes in use, `(normal, offset)`, in face order.
     fn planes(&self) -> impl Iterator<Item = (Vec3, f32)> + '_ {
         self.normals
@@ -181,17 +256,84 @@ impl ConvexHull {
             .take(self.face_count())
     }
 
+    /// The vertex with the largest `v · dir`, the lowest index on ties (vertex 0 when no
+    /// product is above `−∞`, e.g. all NaN). Four running maxima over the vertices
+    /// `k, k + 4, k + 8, ...` are merged at the end: the same answer as one scan in index
+    /// order, with four independent compare chains instead of one long one (GJK waits on
+    /// every support point).
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
-        let mut best = 0usize;
-        let mut best_d = f32::NEG_INFINITY;
-        for (i, v) in self.vertices().iter().enumerate() {
-            let d = v.dot(dir);
-            if d > best_d {
-                best_d = d;
-                best = i;
+        // A select, not a branch: which vertex wins is data.
+        #[inline(always)]
+        fn take(best: &mut (f32, usize), d: f32, i: usize) {
+            let wins = d > best.0;
+            best.0 = if wins { d } else { best.0 };
+            best.1 = if wins { i } else { best.1 };
+        }
+        let vs = self.vertices();
+        let none = (f32::NEG_INFINITY, usize::MAX);
+        let (mut l0, mut l1, mut l2, mut l3) = (none, none, none, none);
+        let mut chunks = vs.chunks_exact(4);
+        let mut base = 0usize;
+        for c in chunks.by_ref() {
+            if let [v0, v1, v2, v3] = c {
+                take(&mut l0, v0.dot(dir), base);
+                take(&mut l1, v1.dot(dir), base + 1);
+                take(&mut l2, v2.dot(dir), base + 2);
+                take(&mut l3, v3.dot(dir), base + 3);
+            }
+            base += 4;
+        }
+        for (k, v) in chunks.remainder().iter().enumerate() {
+            let lane = match k {
+                0 => &mut l0,
+                1 => &mut l1,
+                _ => &mut l2,
+            };
+            take(lane, v.dot(dir), base + k);
+        }
+        // Merge: the largest product, the lowest index among equal ones.
+        let mut best = none;
+        for lane in [l0, l1, l2, l3] {
+            let better = lane.1 != usize::MAX
+                && (best.1 == usize::MAX
+                    || lane.0 > best.0
+                    || (lane.0 == best.0 && lane.1 < best.1));
+            if better {
+                best = lane;
             }
         }
-        (self.core_vertex(best as u32), best as u32)
+        let i = if best.1 == usize::MAX { 0 } else { best.1 };
+        (self.core_vertex(i as u32), i as u32)
+    }
+
+    /// The smallest `v · dir` over the vertices (`+∞` for none; NaN products are
+    /// skipped): the same number as `dir · v` for the vertex [`ConvexHull::core_support`]
+    /// picks along `−dir`, bit for bit (the products only change sign), without finding
+    /// the vertex. Four running minima, merged at the end.
+    pub(crate) fn min_dot(&self, dir: Vec3) -> f32 {
+        #[inline(always)]
+        fn take(best: &mut f32, d: f32) {
+            *best = if d < *best { d } else { *best };
+        }
+        let vs = self.vertices();
+        let (mut l0, mut l1, mut l2, mut l3) =
+            (f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::INFINITY);
+        let mut chunks = vs.chunks_exact(4);
+        for c in chunks.by_ref() {
+            if let [v0, v1, v2, v3] = c {
+                take(&mut l0, v0.dot(dir));
+                take(&mut l1, v1.dot(dir));
+                take(&mut l2, v2.dot(dir));
+                take(&mut l3, v3.dot(dir));
+            }
+        }
+        for v in chunks.remainder() {
+            take(&mut l0, v.dot(dir));
+        }
+        take(&mut l0, l1);
+        take(&mut l2, l3);
+        take(&mut l0, l2);
+        l0
     }
 
     pub(crate) fn core_vertex(&self, index: u32) -> Vec3 {
@@ -213,19 +355,7 @@ impl ConvexHull {
                 best = f;
             }
         }
-        let (normal, _) = self.plane(best);
-        let mut face = Face::new(normal, FeatureId::face(best as u32));
-        let idx = self.face_vertices(best);
-        let next = idx.iter().skip(1).chain(idx.first());
-        for (&i, &j) in idx.iter().zip(next) {
-            let (i, j) = (i as u32, j as u32);
-            face.push(
-                self.core_vertex(i),
-                FeatureId::vertex(i),
-                FeatureId::edge(i, j),
-            );
-        }
-        face
+        self.face(best)
     }
 
     pub(crate) fn aabb(&self, pose: &Iso) -> Aabb {
@@ -1212,6 +1342,7 @@ impl<'p> Builder<'p> {
         if hull.face_count < 4 || hull.vertex_count < 4 {
             return Err(Error::Hull(HullError::Coplanar));
         }
+        link_edges(&mut hull);
         // Not seen after the width test, but a hull without volume is flat.
         let (_, centroid, _) = hull
             .volume_integrals()
@@ -1557,6 +1688,47 @@ impl Polygons {
     }
 }
 
+/// Fill the hull's edge list: every directed edge `i → j` (`i < j`) of a face, paired with
+/// the face that holds `j → i`, unless the two faces are coplanar (the seam of a split
+/// face). Quadratic in the number of corners (at most 372), once per hull. `closed` says
+/// whether every corner found its twin.
+fn link_edges(hull: &mut ConvexHull) {
+    let faces = hull.face_count();
+    // The directed edge leaving corner k of face f.
+    let edge_at = |h: &ConvexHull, f: usize, k: usize| -> Option<(u8, u8)> {
+        let v = h.face_vertices(f);
+        Some((*v.get(k)?, *v.get((k + 1) % v.len().max(1))?))
+    };
+    let mut closed = true;
+    let mut count = 0usize;
+    for f in 0..faces {
+        for k in 0..hull.face_vertices(f).len() {
+            let Some((i, j)) = edge_at(hull, f, k) else {
+                continue;
+            };
+            let twin = (0..faces).filter(|&g| g != f).find(|&g| {
+                (0..hull.face_vertices(g).len()).any(|m| edge_at(hull, g, m) == Some((j, i)))
+            });
+            let Some(g) = twin else {
+                closed = false;
+                continue;
+            };
+            let coplanar = hull.normals.get(f) == hull.normals.get(g);
+            if i < j && !coplanar {
+                match hull.edges.get_mut(count) {
+                    Some(slot) => {
+                        *slot = [i, j, f as u8, g as u8];
+                        count += 1;
+                    }
+                    None => closed = false,
+                }
+            }
+        }
+    }
+    hull.edge_count = count as u8;
+    hull.closed = closed;
+}
+
 /// Write one polygon (output vertex indices, counter-clockwise, first corner lowest) with
 /// its plane as faces: whole when it has at most [`MAX_FACE_VERTICES`] corners, else as a
 /// fan of pieces from corner 0: `0, 1..=15`, `0, 15..=29`, ... (each piece a convex
@@ -1612,4 +1784,65 @@ fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<
     *hull.face_len.get_mut(f).ok_or(full)? = corners.len() as u8;
     hull.face_count += 1;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The support scan in index order, strict `>`: the reference for the four-lane scan.
+    fn sequential_support(h: &ConvexHull, dir: Vec3) -> u32 {
+        let mut best = 0usize;
+        let mut best_d = f32::NEG_INFINITY;
+        for (i, v) in h.vertices().iter().enumerate() {
+            let d = v.dot(dir);
+            if d > best_d {
+                best_d = d;
+                best = i;
+            }
+        }
+        best as u32
+    }
+
+    #[test]
+    fn four_lane_support_is_the_sequential_scan() {
+        let mut rng = SplitMix64::new(21);
+        // A cube's corners (ties along the axes and diagonals) and random clouds of
+        // every remainder mod 4.
+        let cube: std::vec::Vec<Vec3> = (0..8)
+            .map(|i| {
+                let s = |b: u32| if i & b != 0 { 1.0 } else { -1.0 };
+                Vec3::new(s(1), s(2), s(4))
+            })
+            .collect();
+        let mut hulls = std::vec![ConvexHull::new(&cube).unwrap()];
+        for n in 4..40 {
+            let pts: std::vec::Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
+            if let Ok(h) = ConvexHull::new(&pts) {
+                hulls.push(h);
+            }
+        }
+        let axes = [
+            Vec3::X,
+            Vec3::Y,
+            Vec3::Z,
+            -Vec3::X,
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::ZERO,
+        ];
+        for h in &hulls {
+            for dir in axes
+                .iter()
+                .copied()
+                .chain((0..50).map(|_| rng.unit_vector()))
+            {
+                let (p, i) = h.core_support(dir);
+                assert_eq!(i, sequential_support(h, dir), "{dir:?}");
+                assert_eq!(p, h.core_vertex(i));
+            }
+            let nan = Vec3::new(f32::NAN, 0.0, 0.0);
+            assert_eq!(h.core_support(nan).1, sequential_support(h, nan));
+        }
+    }
 }

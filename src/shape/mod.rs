@@ -15,7 +15,9 @@ mod triangle;
 
 pub use capsule::Capsule;
 pub use cuboid::Cuboid;
-pub use hull::{ConvexHull, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES};
+pub use hull::{
+    ConvexHull, MAX_HULL_EDGES, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES,
+};
 pub use plane::HalfSpace;
 pub use sphere::Sphere;
 pub use triangle::Triangle;
@@ -150,6 +152,17 @@ impl Face {
     /// The vertices in use.
     pub fn points(&self) -> &[Vec3] {
         &self.vertices[..self.len as usize]
+    }
+
+    /// Move the face into another frame in place: `x ↦ r x + t` for its vertices, `r n`
+    /// for its normal (`r` a rotation matrix).
+    #[inline]
+    pub(crate) fn transform_by(&mut self, r: &Mat3, t: Vec3) {
+        self.normal = r.mul_vec(self.normal);
+        let n = (self.len as usize).min(MAX_FACE_VERTICES);
+        for v in self.vertices.iter_mut().take(n) {
+            *v = r.mul_vec(*v) + t;
+        }
     }
 
     /// The face moved into another frame by `iso`.

@@ -1,0 +1,1615 @@
+//! The separating axis test (SAT) for polytope pairs (box–box, box–hull, hull–hull) and for
+//! a capsule against a box, and the contact manifolds built on its answer.
+//!
+//! # The test
+//!
+//! Two convex polytopes A and B are disjoint exactly when a plane separates them, and the
+//! plane's normal can always be taken among the face normals of their Minkowski
+//! difference `D = B − A` (Gregorius, "The Separating Axis Test between Convex Polyhedra",
+//! GDC 2013). The faces of `D` are of three kinds:
+//!
+//! 1. a face of A swept by the feature of B that supports the opposite direction: normal
+//!    = A's face normal;
+//! 2. a face of B swept by a feature of A: normal = B's face normal, reversed;
+//! 3. the parallelogram of an edge of A and an edge of B, when it is a face of `D` at all:
+//!    normal ±(e_A × e_B).
+//!
+//! Along a unit axis `n` (from A towards B) the separation is
+//! `s(n) = min_{b∈B} n·b − max_{a∈A} n·a`, computed with one support point per shape. The
+//! largest `s` over the face normals of `D` is the signed distance of the shapes when they
+//! overlap (minus the penetration depth): the point of `D`'s boundary nearest to the
+//! origin is the origin's projection on `D`'s nearest face plane, and it lies inside that
+//! face. When the shapes are apart the largest `s` is only a lower bound of the distance:
+//! it is the distance when the closest points of `D` lie inside a face, and smaller when
+//! they lie on an edge or a vertex of `D` (two boxes corner to corner).
+//!
+//! # Gauss-map pruning
+//!
+//! The Gauss map sends each feature of a polytope to the unit directions it supports: a
+//! face to its normal, an edge to the great arc between the normals of its two faces. An
+//! edge of A and an edge of B span a face of `D` exactly when A's arc and B's arc turned
+//! inside out (`−n`) cross. For A's arc `(a, b)` and B's negated arc `(c, d)` the arcs
+//! cross when `c` and `d` lie on opposite sides of the plane of `(a, b)`,
+//! `(c·(b×a)) (d·(b×a)) < 0`; `a` and `b` on opposite sides of the plane of `(c, d)`,
+//! `(a·(d×c)) (b·(d×c)) < 0`; and the two great circles cross on the arcs' side of the
+//! sphere, not at the antipodes, `(c·(b×a)) (b·(d×c)) > 0` (Gregorius's three triple
+//! products). For faces wound counter-clockwise about outward normals, `b×a` points along
+//! A's edge reversed and `d×c` along B's edge reversed, so the edge vectors stand in for
+//! the two cross products (which lose their direction when two faces are almost coplanar).
+//! Only pairs that pass are measured, along `n = ±(e_A × e_B) / |e_A × e_B|` oriented away
+//! from A's centre, `s = n · (p_B − p_A)` for any points on the two edges (the edges are
+//! the supporting features along `±n`). Nearly parallel edges (`sin θ` below
+//! [`EDGE_PARALLEL_SIN`]) are skipped: their axis is rounding noise, and the face axes
+//! next to them carry the contact.
+//!
+//! Two boxes need no pruning: the arcs of one box's edges along one direction make up the
+//! whole great circle perpendicular to it, so for every pair of edge directions `(i, j)`
+//! exactly one pair of edges spans a face of `D` with a normal towards B, at
+//! `±(e_i × b_j)`; its separation has the closed form of the 15-axis box test (Gottschalk,
+//! Lin and Manocha, "OBBTree", 1996), and its edges are the box supports along `±n`.
+//!
+//! # The axis chosen, and the manifold
+//!
+//! The test keeps the best (largest) separation of each kind, ties to the lowest index,
+//! and stops as soon as one axis separates the shapes by more than the margin. Then:
+//! B's best face is preferred to A's only when it separates by more than the tolerance
+//! `SAT_TOLERANCE · scale`, and the best edge pair to the best face likewise (see
+//! [`SAT_TOLERANCE`]), so a resting contact keeps a stable normal.
+//!
+//! - A face axis: the reference face is that face, the incident face the other shape's
+//!   face most anti-parallel to it; the incident face is clipped against the reference
+//!   face's side planes (Sutherland–Hodgman, [`super::clip`]), points within the margin
+//!   are kept and reduced to 4, with the feature pair of each point as ids. The normal is
+//!   the reference face's, exactly.
+//! - An edge axis: one point, the closest points of the two edge segments (Ericson 5.1.9),
+//!   ids (edge of A, edge of B).
+//!
+//! Guard: the deepest clipped point must be within `2 · SAT_TOLERANCE · scale` of the
+//! axis's separation, and an edge point of shapes that are apart must lie inside both
+//! segments. Otherwise the closest (or deepest) features are not the ones the axis found
+//! (shapes apart at a corner, or a near-tie the tolerance let through) and the test answers
+//! [`SatOutcome::Fallback`]: the caller runs the general GJK/EPA path.
+//!
+//! Everything runs in A's frame with B's rotation as a matrix; loops are bounded by the
+//! shapes' face and edge counts; no allocation, no arrays but the clipping buffers.
+
+use super::analytic::{feature_at, segment_closest_points};
+use super::clip;
+use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold};
+use crate::math::{scalar, Iso, Mat3, Vec3};
+use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES, MAX_HULL_FACES};
+
+/// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
+/// [`super::contact`]): B's best face must separate more than A's, and the best edge pair
+/// more than the best face, by `SAT_TOLERANCE · scale` (m) to be chosen, with
+/// `scale = |t|∞ + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
+/// largest core coordinate; for a hull, its build tolerance over
+/// [`crate::shape::ConvexHull::TOLERANCE`]). For 1 m shapes about 3e-5 m: a hundred times the
+/// rounding of a separation (about 1e-7 of the scale), so resting contacts keep their
+/// reference face and normal through rounding and solver jitter, and small enough that a
+/// face chosen over a slightly better axis stays within 1e-4 m of the true depth.
+pub const SAT_TOLERANCE: f32 = 1.0e-5;
+
+/// Edge pairs whose directions make an angle with `sin θ` below this (about 0.06°) are
+/// skipped: their cross product is then dominated by rounding, and the face axes at the
+/// ends of the two nearly coinciding arcs carry the contact (for exactly parallel edges
+/// they are the faces of `D`).
+pub(crate) const EDGE_PARALLEL_SIN: f32 = 1.0e-3;
+
+/// The guard of a clipped manifold, in units of the axis tolerance.
+const GUARD_FACTOR: f32 = 2.0;
+
+/// The axis a pair's last separating axis test ended on, by shape-local index: a face of
+/// A, a face of B or a pair of edges (box edges are numbered 0–11: edges along local
+/// axis `i` are `4i + m`, `m` giving the signs of the other two coordinates; hull edges by
+/// their place in the hull's edge list).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub enum SatAxis {
+    /// Nothing known.
+    #[default]
+    Unknown,
+    /// Face `index` of A.
+    FaceA(u16),
+    /// Face `index` of B.
+    FaceB(u16),
+    /// Edge `a` of A and edge `b` of B.
+    Edges(u16, u16),
+}
+
+/// What one pair remembers between steps for [`super::contact_cached`]: the axis its
+/// separating axis test ended on (the one that proved the shapes apart, or the contact's
+/// axis). Six bytes, `Copy`; `Default` is an empty cache.
+///
+/// The cache only makes queries faster, never different: the remembered axis is tried
+/// first and used only to answer "apart by more than the margin" when it proves that on
+/// its own, computed exactly as the full test computes it; otherwise the full test runs
+/// from scratch. So the same query gives bit-identical results with a fresh cache, a stale
+/// one (from an earlier pose) or any garbage (indices out of range are ignored).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+pub struct PairCache {
+    /// The last axis.
+    pub axis: SatAxis,
+}
+
+/// How a separating axis test ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum SatOutcome {
+    /// Apart by more than the margin.
+    Separated,
+    /// The manifold (A's frame) is in the caller's `out`.
+    Contact,
+    /// The test cannot build the manifold exactly (see the module docs, "Guard"): use the
+    /// GJK/EPA path.
+    Fallback,
+}
+
+/// B's pose in A's frame with its rotation as a matrix (columns: B's axes in A's frame).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Frame {
+    r: Mat3,
+    t: Vec3,
+}
+
+impl Frame {
+    pub(crate) fn new(b_in_a: &Iso) -> Frame {
+        Frame {
+            r: rotation_matrix(b_in_a.rotation),
+            t: b_in_a.position,
+        }
+    }
+
+    /// B-local point to A's frame.
+    #[inline]
+    fn point(&self, p: Vec3) -> Vec3 {
+        self.r.mul_vec(p) + self.t
+    }
+
+    /// B-local direction to A's frame.
+    #[inline]
+    fn vector(&self, v: Vec3) -> Vec3 {
+        self.r.mul_vec(v)
+    }
+
+    /// A-frame direction to B's local frame.
+    #[inline]
+    fn inv_vector(&self, v: Vec3) -> Vec3 {
+        self.r.transpose_mul_vec(v)
+    }
+}
+
+/// The rotation matrix of a unit quaternion `(x, y, z, w)` in one pass:
+/// `1 − 2(y² + z²)`, `2(xy − wz)`, ... (the columns are the rotated axes).
+#[inline]
+pub(crate) fn rotation_matrix(q: crate::math::Quat) -> Mat3 {
+    let (x, y, z, w) = (q.x, q.y, q.z, q.w);
+    let (x2, y2, z2) = (x + x, y + y, z + z);
+    let (xx, yy, zz) = (x * x2, y * y2, z * z2);
+    let (xy, xz, yz) = (x * y2, x * z2, y * z2);
+    let (wx, wy, wz) = (w * x2, w * y2, w * z2);
+    Mat3::from_cols(
+        Vec3::new(1.0 - (yy + zz), xy + wz, xz - wy),
+        Vec3::new(xy - wz, 1.0 - (xx + zz), yz + wx),
+        Vec3::new(xz + wy, yz - wx, 1.0 - (xx + yy)),
+    )
+}
+
+/// An edge of a polytope (local frame): from vertex `v0` to vertex `v1`, between the face
+/// with normal `n0` (which runs `v0 → v1` counter-clockwise) and the face with normal
+/// `n1`, so `n1 × n0` points along `p0 − p1`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PolyEdge {
+    /// Vertex index of `p0`.
+    pub v0: u32,
+    /// Vertex index of `p1`.
+    pub v1: u32,
+    /// Start point.
+    pub p0: Vec3,
+    /// End point.
+    pub p1: Vec3,
+    /// Normal of the face along `p0 → p1`.
+    pub n0: Vec3,
+    /// Normal of the face along `p1 → p0`.
+    pub n1: Vec3,
+}
+
+/// What the separating axis test needs of a polytope, in its local frame.
+pub(crate) trait Polytope {
+    /// Number of faces.
+    fn face_count(&self) -> usize;
+    /// Face `f`'s outward unit normal and offset (`n · p = d` on the face).
+    fn plane(&self, f: usize) -> (Vec3, f32);
+    /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
+    fn min_dot(&self, dir: Vec3) -> f32;
+    /// Number of edges.
+    fn edge_count(&self) -> usize;
+    /// Edge `e`, `None` past the last.
+    fn edge(&self, e: usize) -> Option<PolyEdge>;
+    /// The faces of edge `e` (along `p0 → p1`, along `p1 → p0`), `None` past the last.
+    fn edge_faces(&self, e: usize) -> Option<(usize, usize)>;
+    /// Face `f` as a polygon with feature ids.
+    fn polygon(&self, f: usize) -> Face;
+    /// The face whose normal is most aligned with `dir`.
+    fn face_along(&self, dir: Vec3) -> Face;
+    /// A point well inside.
+    fn center(&self) -> Vec3;
+    /// The largest core coordinate (m): the size that rounding scales with.
+    fn extent(&self) -> f32;
+}
+
+/// The unit vector along local axis `k` (0, 1, anything else → 2), times `s`.
+#[inline]
+fn axis_vector(k: usize, s: f32) -> Vec3 {
+    match k {
+        0 => Vec3::new(s, 0.0, 0.0),
+        1 => Vec3::new(0.0, s, 0.0),
+        _ => Vec3::new(0.0, 0.0, s),
+    }
+}
+
+/// Box edge `4i + m` runs along axis `i` (from the vertex with bit `i` clear to the one
+/// with it set); bit 0 of `m` is the sign of axis `u = i + 1`, bit 1 the sign of axis
+/// `w = i + 2` (mod 3).
+#[inline]
+fn cuboid_edge_index(i: usize, positive_u: bool, positive_w: bool) -> usize {
+    4 * i + positive_u as usize + 2 * positive_w as usize
+}
+
+impl Polytope for Cuboid {
+    fn face_count(&self) -> usize {
+        6
+    }
+
+    fn plane(&self, f: usize) -> (Vec3, f32) {
+        let axis = (f / 2).min(2);
+        let s = if f % 2 == 1 { 1.0 } else { -1.0 };
+        (axis_vector(axis, s), self.half_extents[axis])
+    }
+
+    #[inline]
+    fn min_dot(&self, dir: Vec3) -> f32 {
+        dir.dot(self.core_support(-dir).0)
+    }
+
+    fn edge_count(&self) -> usize {
+        12
+    }
+
+    fn edge(&self, e: usize) -> Option<PolyEdge> {
+        if e >= 12 {
+            return None;
+        }
+        let i = e / 4;
+        let (u, w) = ((i + 1) % 3, (i + 2) % 3);
+        let (pu, pw) = (e & 1 != 0, e & 2 != 0);
+        let v0 = ((pu as u32) << u) | ((pw as u32) << w);
+        let v1 = v0 | (1 << i);
+        let nu = axis_vector(u, if pu { 1.0 } else { -1.0 });
+        let nw = axis_vector(w, if pw { 1.0 } else { -1.0 });
+        // (±e_u) × (±e_w) = ±e_i: the face whose normal comes first in a product along
+        // +e_i runs along the edge (+e_i) counter-clockwise.
+        let (n0, n1) = if pu == pw { (nu, nw) } else { (nw, nu) };
+        Some(PolyEdge {
+            v0,
+            v1,
+            p0: self.core_vertex(v0),
+            p1: self.core_vertex(v1),
+            n0,
+            n1,
+        })
+    }
+
+    fn edge_faces(&self, e: usize) -> Option<(usize, usize)> {
+        if e >= 12 {
+            return None;
+        }
+        let i = e / 4;
+        let (u, w) = ((i + 1) % 3, (i + 2) % 3);
+        let (pu, pw) = (e & 1 != 0, e & 2 != 0);
+        let fu = 2 * u + pu as usize;
+        let fw = 2 * w + pw as usize;
+        Some(if pu == pw { (fu, fw) } else { (fw, fu) })
+    }
+
+    fn polygon(&self, f: usize) -> Face {
+        self.face((f / 2).min(2), f % 2 == 1)
+    }
+
+    fn face_along(&self, dir: Vec3) -> Face {
+        self.supporting_face(dir)
+    }
+
+    fn center(&self) -> Vec3 {
+        Vec3::ZERO
+    }
+
+    fn extent(&self) -> f32 {
+        self.half_extents.max_elem()
+    }
+}
+
+impl Polytope for ConvexHull {
+    fn face_count(&self) -> usize {
+        ConvexHull::face_count(self)
+    }
+
+    fn plane(&self, f: usize) -> (Vec3, f32) {
+        ConvexHull::plane(self, f)
+    }
+
+    #[inline]
+    fn min_dot(&self, dir: Vec3) -> f32 {
+        ConvexHull::min_dot(self, dir)
+    }
+
+    fn edge_count(&self) -> usize {
+        ConvexHull::edge_count(self)
+    }
+
+    #[inline]
+    fn edge(&self, e: usize) -> Option<PolyEdge> {
+        let h = ConvexHull::edge(self, e)?;
+        Some(PolyEdge {
+            v0: h.v0 as u32,
+            v1: h.v1 as u32,
+            p0: self.core_vertex(h.v0 as u32),
+            p1: self.core_vertex(h.v1 as u32),
+            n0: self.plane(h.face0 as usize).0,
+            n1: self.plane(h.face1 as usize).0,
+        })
+    }
+
+    #[inline]
+    fn edge_faces(&self, e: usize) -> Option<(usize, usize)> {
+        let h = ConvexHull::edge(self, e)?;
+        Some((h.face0 as usize, h.face1 as usize))
+    }
+
+    fn polygon(&self, f: usize) -> Face {
+        self.face(f)
+    }
+
+    fn face_along(&self, dir: Vec3) -> Face {
+        self.supporting_face(dir)
+    }
+
+    fn center(&self) -> Vec3 {
+        self.centroid()
+    }
+
+    fn extent(&self) -> f32 {
+        // The build tolerance is TOLERANCE times the largest |coordinate|.
+        self.tolerance() / ConvexHull::TOLERANCE
+    }
+}
+
+/// The best face of one shape.
+#[derive(Clone, Copy, Debug)]
+struct FaceBest {
+    index: usize,
+    separation: f32,
+}
+
+/// The best edge pair: the edges' indices, the axis (A's frame, from A towards B) and its
+/// separation.
+#[derive(Clone, Copy, Debug)]
+struct EdgeBest {
+    index_a: usize,
+    index_b: usize,
+    normal: Vec3,
+    separation: f32,
+}
+
+/// The axis chosen for the manifold.
+#[derive(Clone, Copy, Debug)]
+enum Choice {
+    FaceA(FaceBest),
+    FaceB(FaceBest),
+    Edges(EdgeBest),
+}
+
+impl Choice {
+    fn axis(&self) -> SatAxis {
+        match self {
+            Choice::FaceA(f) => SatAxis::FaceA(f.index as u16),
+            Choice::FaceB(f) => SatAxis::FaceB(f.index as u16),
+            Choice::Edges(e) => SatAxis::Edges(e.index_a as u16, e.index_b as u16),
+        }
+    }
+
+    fn separation(&self) -> f32 {
+        match self {
+            Choice::FaceA(f) | Choice::FaceB(f) => f.separation,
+            Choice::Edges(e) => e.separation,
+        }
+    }
+}
+
+/// The axis choice with its bias (see [`SAT_TOLERANCE`]): B's face over A's, an edge pair
+/// over the faces, each only when better by more than `tol`.
+fn choose(face_a: FaceBest, face_b: FaceBest, edge: Option<EdgeBest>, tol: f32) -> Choice {
+    let face = if face_b.separation > face_a.separation + tol {
+        Choice::FaceB(face_b)
+    } else {
+        Choice::FaceA(face_a)
+    };
+    match edge {
+        Some(e) if e.separation > face.separation() + tol => Choice::Edges(e),
+        _ => face,
+    }
+}
+
+/// Separation along face `f` of A: B's support along `−n` above A's plane `n · x = d`.
+#[inline]
+fn face_a_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, f: usize) -> f32 {
+    let (n, d) = a.plane(f);
+    let n_b = fr.inv_vector(n);
+    b.min_dot(n_b) + n.dot(fr.t) - d
+}
+
+/// Separation along face `g` of B: A's support along `−m` above B's plane, which is
+/// `m · x = e + m · t` in A's frame for B's local plane `m_b · y = e` (`m = R m_b`).
+#[inline]
+fn face_b_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, g: usize) -> f32 {
+    let (m_b, e) = b.plane(g);
+    let m = fr.vector(m_b);
+    a.min_dot(m) - m.dot(fr.t) - e
+}
+
+/// A's edge seen from B's frame, for the Gauss-map test: its arc's normals and its vector.
+#[derive(Clone, Copy, Debug)]
+struct ArcA {
+    edge: PolyEdge,
+    /// `p1 − p0`, A's frame.
+    vector: Vec3,
+    n0_b: Vec3,
+    n1_b: Vec3,
+    vector_b: Vec3,
+}
+
+impl ArcA {
+    #[inline]
+    fn new(edge: PolyEdge, fr: &Frame) -> ArcA {
+        let vector = edge.p1 - edge.p0;
+        ArcA {
+            edge,
+            vector,
+            n0_b: fr.inv_vector(edge.n0),
+            n1_b: fr.inv_vector(edge.n1),
+            vector_b: fr.inv_vector(vector),
+        }
+    }
+}
+
+/// Gregorius's test (module docs): A's arc `(a, b) = (n0, n1)` with `b × a ∥ −e_A`, B's
+/// arc negated, `(c, d) = (−n0_B, −n1_B)` with `d × c ∥ −e_B`, all in B's frame:
+/// `c·(b×a) = n0_B · e_A` and `d·(b×a) = n1_B · e_A` (given, see [`query`]),
+/// `a·(d×c) = −n0_A · e_B`, `b·(d×c) = −n1_A · e_B`.
+#[inline]
+fn is_minkowski_face(arc: &ArcA, cba: f32, dba: f32, e_b: Vec3) -> bool {
+    let straddles = cba * dba < 0.0; // false for NaN too
+    if !straddles {
+        return false;
+    }
+    let adc = -arc.n0_b.dot(e_b);
+    let bdc = -arc.n1_b.dot(e_b);
+    adc * bdc < 0.0 && cba * bdc > 0.0
+}
+
+/// The axis of two edges, `p1 + s e1` of A and `p2 + t e2` of B (both in A's frame, with
+/// the shapes' centres `c1`, `c2`): `n = e1 × e2 / |e1 × e2|`, turned away from A (by the
+/// centre with the larger lever, so a thin shape does not flip it), and the separation
+/// `n · (p2 − p1)`; `None` for nearly parallel edges ([`EDGE_PARALLEL_SIN`]).
+#[inline]
+fn edge_axis(p1: Vec3, e1: Vec3, c1: Vec3, p2: Vec3, e2: Vec3, c2: Vec3) -> Option<(Vec3, f32)> {
+    let u = e1.cross(e2);
+    let uu = u.length_squared();
+    let limit = EDGE_PARALLEL_SIN * EDGE_PARALLEL_SIN * e1.length_squared() * e2.length_squared();
+    let crossing = uu > limit; // false for NaN too
+    if !crossing {
+        return None;
+    }
+    let (n, _) = u.normalize_and_length()?;
+    let sign1 = n.dot(p1 - c1);
+    let sign2 = n.dot(p2 - c2);
+    let flip = if scalar::abs(sign1) > scalar::abs(sign2) {
+        sign1 < 0.0
+    } else {
+        sign2 > 0.0
+    };
+    let n = if flip { -n } else { n };
+    Some((n, n.dot(p2 - p1)))
+}
+
+/// The edge pair of `arc` and B's edge from `p0_b` along `e_b` (B's frame): its axis and
+/// separation when it spans a face of `D`; `cba`, `dba` are B's two face normals dotted
+/// with A's edge (B's frame).
+#[inline]
+fn edge_pair(
+    arc: &ArcA,
+    (p0_b, e_b): (Vec3, Vec3),
+    (cba, dba): (f32, f32),
+    fr: &Frame,
+    centers: (Vec3, Vec3),
+) -> Option<(Vec3, f32)> {
+    if !is_minkowski_face(arc, cba, dba, e_b) {
+        return None;
+    }
+    edge_axis(
+        arc.edge.p0,
+        arc.vector,
+        centers.0,
+        fr.point(p0_b),
+        fr.vector(e_b),
+        centers.1,
+    )
+}
+
+/// The full test: `Err(axis)` when `axis` separates the shapes by more than `margin`, else
+/// the best face of each shape and the best edge pair. Work: `F_A + F_B` support values,
+/// `E_A (F_B + E_B)` cheap products and look-ups, the full Gauss-map test on the pairs that
+/// pass the first product only. Stack: B's edge list and the look-up tables, about 7 KiB
+/// at most (sized for the largest hull; box–box never comes here).
+fn query<A: Polytope, B: Polytope>(
+    a: &A,
+    b: &B,
+    fr: &Frame,
+    margin: f32,
+) -> Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis> {
+    let mut face_a = FaceBest {
+        index: 0,
+        separation: f32::NEG_INFINITY,
+    };
+    for f in 0..a.face_count() {
+        let s = face_a_separation(a, b, fr, f);
+        if s > margin {
+            return Err(SatAxis::FaceA(f as u16));
+        }
+        if s > face_a.separation {
+            face_a = FaceBest {
+                index: f,
+                separation: s,
+            };
+        }
+    }
+    let mut face_b = FaceBest {
+        index: 0,
+        separation: f32::NEG_INFINITY,
+    };
+    for g in 0..b.face_count() {
+        let s = face_b_separation(a, b, fr, g);
+        if s > margin {
+            return Err(SatAxis::FaceB(g as u16));
+        }
+        if s > face_b.separation {
+            face_b = FaceBest {
+                index: g,
+                separation: s,
+            };
+        }
+    }
+    let centers = (a.center(), fr.point(b.center()));
+    let mut edge: Option<EdgeBest> = None;
+    // B's edges once: start, vector and faces (B's frame).
+    // (index, start, vector, face along, face against).
+    let mut edges_b: heapless::Vec<(u8, Vec3, Vec3, u8, u8), MAX_HULL_EDGES> = heapless::Vec::new();
+    for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
+        let (Some(e), Some((f0, f1))) = (b.edge(ib), b.edge_faces(ib)) else {
+            continue;
+        };
+        // Cannot be full: at most MAX_HULL_EDGES edges.
+        let _ = edges_b.push((ib as u8, e.p0, e.p1 - e.p0, f0 as u8, f1 as u8));
+    }
+    // B's face normals dotted with the current A edge (B's frame): the first triple
+    // product of every B edge is a look-up, and most pairs stop there. The pairs that
+    // pass it are collected without a branch (which one passes is data), then tested.
+    // Tables indexed by a byte: every look-up is in range.
+    let faces_b = b.face_count().min(MAX_HULL_FACES);
+    let mut dots = [0.0f32; 256];
+    let mut passing = [0u8; 256];
+    let mut pairs_b = [(0u8, 0u8); MAX_HULL_EDGES];
+    for (slot, e) in pairs_b.iter_mut().zip(edges_b.iter()) {
+        *slot = (e.3, e.4);
+    }
+    let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
+    for ia in 0..a.edge_count() {
+        let Some(ea) = a.edge(ia) else { continue };
+        let arc = ArcA::new(ea, fr);
+        for (g, d) in dots.iter_mut().enumerate().take(faces_b) {
+            *d = b.plane(g).0.dot(arc.vector_b);
+        }
+        let mut count = 0usize;
+        for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
+            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
+            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
+            let straddles = cba * dba < 0.0; // false for NaN too
+            if let Some(slot) = passing.get_mut(count & 0xff) {
+                *slot = k as u8;
+            }
+            count += straddles as usize;
+        }
+        for &k in passing.iter().take(count) {
+            let Some(&(ib, p0_b, e_b, f0, f1)) = edges_b.get(k as usize) else {
+                continue;
+            };
+            let ib = ib as usize;
+            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
+            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
+            let Some((normal, s)) = edge_pair(&arc, (p0_b, e_b), (cba, dba), fr, centers) else {
+                continue;
+            };
+            if s > margin {
+                return Err(SatAxis::Edges(ia as u16, ib as u16));
+            }
+            if edge.is_none_or(|e| s > e.separation) {
+                edge = Some(EdgeBest {
+                    index_a: ia,
+                    index_b: ib,
+                    normal,
+                    separation: s,
+                });
+            }
+        }
+    }
+    Ok((face_a, face_b, edge))
+}
+
+/// True when the cached axis, computed exactly as [`query`] computes it, separates the
+/// shapes by more than `margin`. Indices out of range prove nothing.
+fn cached_separates<A: Polytope, B: Polytope>(
+    a: &A,
+    b: &B,
+    fr: &Frame,
+    margin: f32,
+    axis: SatAxis,
+) -> bool {
+    match axis {
+        SatAxis::Unknown => false,
+        SatAxis::FaceA(f) => {
+            (f as usize) < a.face_count() && face_a_separation(a, b, fr, f as usize) > margin
+        }
+        SatAxis::FaceB(g) => {
+            (g as usize) < b.face_count() && face_b_separation(a, b, fr, g as usize) > margin
+        }
+        SatAxis::Edges(ia, ib) => {
+            let (Some(ea), Some(eb)) = (a.edge(ia as usize), b.edge(ib as usize)) else {
+                return false;
+            };
+            let centers = (a.center(), fr.point(b.center()));
+            let arc = ArcA::new(ea, fr);
+            // The same products as `query`'s look-up table: B's face normals (the
+            // edge's `n0`, `n1` are those normals) dotted with A's edge.
+            let dots = (eb.n0.dot(arc.vector_b), eb.n1.dot(arc.vector_b));
+            let edge_b = (eb.p0, eb.p1 - eb.p0);
+            edge_pair(&arc, edge_b, dots, fr, centers).is_some_and(|(_, s)| s > margin)
+        }
+    }
+}
+
+/// The tolerance of the axis choice for a pair (see [`SAT_TOLERANCE`]).
+#[inline]
+fn tolerance(fr: &Frame, extent_a: f32, extent_b: f32) -> f32 {
+    SAT_TOLERANCE * (fr.t.abs().max_elem() + extent_a + extent_b)
+}
+
+/// Two polytopes (B at `b_in_a`): the separating axis test with the cached axis first,
+/// then the manifold of the chosen axis. The cache is updated with the axis the test
+/// ended on.
+pub(crate) fn polytopes<A: Polytope, B: Polytope>(
+    a: &A,
+    b: &B,
+    b_in_a: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let fr = Frame::new(b_in_a);
+    if cached_separates(a, b, &fr, margin, cache.axis) {
+        return SatOutcome::Separated;
+    }
+    let (face_a, face_b, edge) = match query(a, b, &fr, margin) {
+        Ok(found) => found,
+        Err(axis) => {
+            cache.axis = axis;
+            return SatOutcome::Separated;
+        }
+    };
+    let tol = tolerance(&fr, a.extent(), b.extent());
+    let choice = choose(face_a, face_b, edge, tol);
+    cache.axis = choice.axis();
+    build(a, b, &fr, &choice, margin, tol, out)
+}
+
+/// The manifold of the chosen axis, into `out`.
+fn build<A: Polytope, B: Polytope>(
+    a: &A,
+    b: &B,
+    fr: &Frame,
+    choice: &Choice,
+    margin: f32,
+    tol: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    if !choice.separation().is_finite() {
+        return SatOutcome::Fallback;
+    }
+    match choice {
+        Choice::FaceA(f) => {
+            let reference = a.polygon(f.index);
+            let mut incident = b.face_along(fr.inv_vector(-reference.normal));
+            incident.transform_by(&fr.r, fr.t);
+            guarded(&reference, &incident, true, f.separation, margin, tol, out)
+        }
+        Choice::FaceB(f) => {
+            let mut reference = b.polygon(f.index);
+            reference.transform_by(&fr.r, fr.t);
+            let incident = a.face_along(-reference.normal);
+            guarded(&reference, &incident, false, f.separation, margin, tol, out)
+        }
+        Choice::Edges(e) => match (a.edge(e.index_a), b.edge(e.index_b)) {
+            (Some(ea), Some(eb)) => edge_contact(&ea, &eb, e, fr, margin, out),
+            _ => SatOutcome::Fallback,
+        },
+    }
+}
+
+/// The clipped face manifold, or [`SatOutcome::Fallback`] when it is empty or its deepest
+/// point is shallower than the axis's separation by more than the guard.
+fn guarded(
+    reference: &Face,
+    incident: &Face,
+    reference_is_a: bool,
+    separation: f32,
+    margin: f32,
+    tol: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let found = clipped_face_manifold(reference, incident, reference_is_a, margin, out);
+    if found && out.min_separation() <= separation + GUARD_FACTOR * tol {
+        SatOutcome::Contact
+    } else {
+        SatOutcome::Fallback
+    }
+}
+
+/// The closest points `(s, t)` of segments `p1 + s d1` and `p2 + t d2` that are not
+/// parallel (an edge pair of the test): the lines' closest points (Ericson 5.1.9, one
+/// division) when both lie inside the segments, else [`segment_closest_points`].
+#[inline]
+fn edge_closest_points(p1: Vec3, d1: Vec3, p2: Vec3, d2: Vec3) -> (f32, f32) {
+    let r = p1 - p2;
+    let (a, e, b) = (d1.length_squared(), d2.length_squared(), d1.dot(d2));
+    let (c, f) = (d1.dot(r), d2.dot(r));
+    let denom = a * e - b * b;
+    if denom > 0.0 {
+        let inv = 1.0 / denom;
+        let s = (b * f - c * e) * inv;
+        let t = (a * f - b * c) * inv;
+        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
+            return (s, t);
+        }
+    }
+    segment_closest_points(p1, p1 + d1, p2, p2 + d2)
+}
+
+/// One point at the closest points of the two edges (A's edge in A's frame, B's in B's),
+/// ids (edge of A, edge of B), into `out`. Shapes that are apart need both closest points
+/// strictly inside their segments (else a vertex is closer than the axis says):
+/// [`SatOutcome::Fallback`].
+fn edge_contact(
+    ea: &PolyEdge,
+    eb: &PolyEdge,
+    e: &EdgeBest,
+    fr: &Frame,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let (pa0, da) = (ea.p0, ea.p1 - ea.p0);
+    let (pb0, db) = (fr.point(eb.p0), fr.vector(eb.p1 - eb.p0));
+    let (s, t) = edge_closest_points(pa0, da, pb0, db);
+    let inside = s > 0.0 && s < 1.0 && t > 0.0 && t < 1.0;
+    if e.separation > 0.0 && !inside {
+        return SatOutcome::Fallback;
+    }
+    let id = ContactId {
+        a: FeatureId::edge(ea.v0, ea.v1),
+        b: FeatureId::edge(eb.v0, eb.v1),
+    };
+    out.reset(e.normal);
+    out.push_within(
+        Candidate::new(pa0 + da * s, pb0 + db * t, e.normal, id),
+        margin,
+    );
+    if out.len > 0 {
+        SatOutcome::Contact
+    } else {
+        SatOutcome::Fallback
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Box against box: the 15 axes in closed form.
+// ---------------------------------------------------------------------------------------
+
+/// Two boxes in A's frame: `r` B's rotation (`R_ij = e_i · b_j`, `m[i][j]`), `abs` its
+/// absolute values, `t` B's centre and `tb = Rᵀ t` the same in B's axes; every index
+/// below is a compile-time constant or checked.
+struct BoxPair {
+    ha: [f32; 3],
+    hb: [f32; 3],
+    r: Mat3,
+    m: [[f32; 3]; 3],
+    abs: [[f32; 3]; 3],
+    t: [f32; 3],
+    tb: [f32; 3],
+}
+
+/// Entry `(i, j)` of a 3×3 table, 0 out of range (never, for the indices used).
+#[inline(always)]
+fn entry(table: &[[f32; 3]; 3], i: usize, j: usize) -> f32 {
+    table
+        .get(i)
+        .and_then(|row| row.get(j))
+        .copied()
+        .unwrap_or(0.0)
+}
+
+/// Entry `i` of a triple, 0 out of range.
+#[inline(always)]
+fn elem(v: &[f32; 3], i: usize) -> f32 {
+    v.get(i).copied().unwrap_or(0.0)
+}
+
+impl BoxPair {
+    fn new(a: &Cuboid, b: &Cuboid, fr: &Frame) -> BoxPair {
+        let (x, y, z) = (fr.r.x, fr.r.y, fr.r.z);
+        let m = [[x.x, y.x, z.x], [x.y, y.y, z.y], [x.z, y.z, z.z]];
+        let abs = |v: Vec3| [scalar::abs(v.x), scalar::abs(v.y), scalar::abs(v.z)];
+        let (ax, ay, az) = (abs(x), abs(y), abs(z));
+        let tb = fr.inv_vector(fr.t);
+        BoxPair {
+            ha: a.half_extents.to_array(),
+            hb: b.half_extents.to_array(),
+            r: fr.r,
+            m,
+            abs: [
+                [ax[0], ay[0], az[0]],
+                [ax[1], ay[1], az[1]],
+                [ax[2], ay[2], az[2]],
+            ],
+            t: fr.t.to_array(),
+            tb: tb.to_array(),
+        }
+    }
+
+    /// Face axis `i` of A: `|t_i| − ha_i − Σ_j |R_ij| hb_j`, and the face towards B
+    /// (`2i` for the negative side, also on a tie).
+    #[inline]
+    fn face_a(&self, i: usize) -> (f32, usize) {
+        let rb = entry(&self.abs, i, 0) * self.hb[0]
+            + entry(&self.abs, i, 1) * self.hb[1]
+            + entry(&self.abs, i, 2) * self.hb[2];
+        let ti = elem(&self.t, i);
+        (
+            scalar::abs(ti) - elem(&self.ha, i) - rb,
+            2 * i + (ti > 0.0) as usize,
+        )
+    }
+
+    /// Face axis `j` of B: `|(Rᵀ t)_j| − hb_j − Σ_i |R_ij| ha_i`, and B's face towards A.
+    #[inline]
+    fn face_b(&self, j: usize) -> (f32, usize) {
+        let ra = entry(&self.abs, 0, j) * self.ha[0]
+            + entry(&self.abs, 1, j) * self.ha[1]
+            + entry(&self.abs, 2, j) * self.ha[2];
+        let tj = elem(&self.tb, j);
+        (
+            scalar::abs(tj) - elem(&self.hb, j) - ra,
+            2 * j + (tj < 0.0) as usize,
+        )
+    }
+
+    /// Edge axis `(I, J)`, `L = b_J × e_I`: the separation
+    /// `(|t·L| − Σ_k ha_k |L_k| − Σ_k hb_k |b_k·L|) / |L|` and `(t·L, |L|)`; `None` for
+    /// nearly parallel edges. With `(I, u, w)` and `(J, v, x)` cyclic and `b_J` the column
+    /// `R_·J`: `L = R_wJ e_u − R_uJ e_w`, `t·L = t_u R_wJ − t_w R_uJ`,
+    /// `Σ ha_k |L_k| = ha_u |R_wJ| + ha_w |R_uJ|`, and `b_k · L = e_I · (b_k × b_J)`, which
+    /// is `−R_Ix` for `k = v` and `R_Iv` for `k = x`:
+    /// `Σ hb_k |b_k·L| = hb_v |R_Ix| + hb_x |R_Iv|` (the 15-axis box test; Gottschalk et
+    /// al. 1996, Ericson 4.4.1).
+    #[inline(always)]
+    fn edge<const I: usize, const J: usize>(&self) -> Option<(f32, f32, f32)> {
+        let (u, w) = ((I + 1) % 3, (I + 2) % 3);
+        let (v, x) = ((J + 1) % 3, (J + 2) % 3);
+        let (r_uj, r_wj) = (entry(&self.m, u, J), entry(&self.m, w, J));
+        let ll = r_uj * r_uj + r_wj * r_wj;
+        let crossing = ll > EDGE_PARALLEL_SIN * EDGE_PARALLEL_SIN; // false for NaN too
+        if !crossing {
+            return None;
+        }
+        let ra =
+            elem(&self.ha, u) * entry(&self.abs, w, J) + elem(&self.ha, w) * entry(&self.abs, u, J);
+        let rb =
+            elem(&self.hb, v) * entry(&self.abs, I, x) + elem(&self.hb, x) * entry(&self.abs, I, v);
+        let tl = elem(&self.t, u) * r_wj - elem(&self.t, w) * r_uj;
+        let len = scalar::sqrt(ll);
+        Some(((scalar::abs(tl) - ra - rb) / len, tl, len))
+    }
+
+    /// [`BoxPair::edge`] for indices known at run time (the cached axis).
+    fn edge_at(&self, i: usize, j: usize) -> Option<(f32, f32, f32)> {
+        match (i, j) {
+            (0, 0) => self.edge::<0, 0>(),
+            (0, 1) => self.edge::<0, 1>(),
+            (0, 2) => self.edge::<0, 2>(),
+            (1, 0) => self.edge::<1, 0>(),
+            (1, 1) => self.edge::<1, 1>(),
+            (1, 2) => self.edge::<1, 2>(),
+            (2, 0) => self.edge::<2, 0>(),
+            (2, 1) => self.edge::<2, 1>(),
+            (2, 2) => self.edge::<2, 2>(),
+            _ => None,
+        }
+    }
+
+    /// The unit axis of edge pair `(i, j)` towards B, from [`BoxPair::edge`]'s `t·L` and
+    /// `|L|`.
+    fn edge_normal(&self, i: usize, j: usize, tl: f32, len: f32) -> Vec3 {
+        let r_uj = entry(&self.m, (i + 1) % 3, j);
+        let r_wj = entry(&self.m, (i + 2) % 3, j);
+        let k = scalar::sign(tl) / len;
+        let (a, b) = (r_wj * k, -r_uj * k);
+        match i {
+            0 => Vec3::new(0.0, a, b),
+            1 => Vec3::new(b, 0.0, a),
+            _ => Vec3::new(a, b, 0.0),
+        }
+    }
+}
+
+/// The supporting edge of box `c` along `dir` (local frame) among its edges along axis
+/// `i`: the other two coordinates take the signs of `dir` (`>= 0` positive, as
+/// [`Cuboid::core_support`]). Only the end points and vertex ids are filled (the face
+/// normals are not needed for a contact point).
+fn box_edge_along(c: &Cuboid, i: usize, dir: Vec3) -> (usize, Option<PolyEdge>) {
+    let h = c.half_extents;
+    let (pu, pw) = match i {
+        0 => (dir.y >= 0.0, dir.z >= 0.0),
+        1 => (dir.z >= 0.0, dir.x >= 0.0),
+        _ => (dir.x >= 0.0, dir.y >= 0.0),
+    };
+    let sign = |p: bool, x: f32| if p { x } else { -x };
+    // The end point with coordinate i negative, and the edge vector +2 h_i e_i.
+    let (p0, along, bits) = match i {
+        0 => (
+            Vec3::new(-h.x, sign(pu, h.y), sign(pw, h.z)),
+            Vec3::new(h.x, 0.0, 0.0),
+            ((pu as u32) << 1) | ((pw as u32) << 2),
+        ),
+        1 => (
+            Vec3::new(sign(pw, h.x), -h.y, sign(pu, h.z)),
+            Vec3::new(0.0, h.y, 0.0),
+            ((pu as u32) << 2) | (pw as u32),
+        ),
+        _ => (
+            Vec3::new(sign(pu, h.x), sign(pw, h.y), -h.z),
+            Vec3::new(0.0, 0.0, h.z),
+            (pu as u32) | ((pw as u32) << 1),
+        ),
+    };
+    let i = i.min(2);
+    let edge = PolyEdge {
+        v0: bits,
+        v1: bits | (1 << i),
+        p0,
+        p1: p0 + along + along,
+        n0: Vec3::ZERO,
+        n1: Vec3::ZERO,
+    };
+    (cuboid_edge_index(i, pu, pw), Some(edge))
+}
+
+/// Box against box: [`polytopes`] with the closed-form axes.
+pub(crate) fn cuboids(
+    a: &Cuboid,
+    b: &Cuboid,
+    b_in_a: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let fr = Frame::new(b_in_a);
+    let p = BoxPair::new(a, b, &fr);
+    let separates = match cache.axis {
+        SatAxis::Unknown => false,
+        SatAxis::FaceA(f) => f < 6 && p.face_a(f as usize / 2).0 > margin,
+        SatAxis::FaceB(g) => g < 6 && p.face_b(g as usize / 2).0 > margin,
+        SatAxis::Edges(ea, eb) => {
+            ea < 12 && eb < 12 && {
+                let pair = p.edge_at(ea as usize / 4, eb as usize / 4);
+                pair.is_some_and(|(s, _, _)| s > margin)
+            }
+        }
+    };
+    if separates {
+        return SatOutcome::Separated;
+    }
+    let (face_a, face_b, edge) = match box_query(a, b, &p, margin) {
+        Ok(found) => found,
+        Err(axis) => {
+            cache.axis = axis;
+            return SatOutcome::Separated;
+        }
+    };
+    let tol = tolerance(&fr, a.extent(), b.extent());
+    let choice = choose(face_a, face_b, edge, tol);
+    cache.axis = choice.axis();
+    build(a, b, &fr, &choice, margin, tol, out)
+}
+
+/// The box test's 15 axes in the order of [`query`] (A's faces, B's faces, edge pairs),
+/// with the same early exit.
+fn box_query(
+    a: &Cuboid,
+    b: &Cuboid,
+    p: &BoxPair,
+    margin: f32,
+) -> Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis> {
+    let mut face_a = FaceBest {
+        index: 0,
+        separation: f32::NEG_INFINITY,
+    };
+    for i in 0..3 {
+        let (s, f) = p.face_a(i);
+        if s > margin {
+            return Err(SatAxis::FaceA(f as u16));
+        }
+        if s > face_a.separation {
+            face_a = FaceBest {
+                index: f,
+                separation: s,
+            };
+        }
+    }
+    let mut face_b = FaceBest {
+        index: 0,
+        separation: f32::NEG_INFINITY,
+    };
+    for j in 0..3 {
+        let (s, g) = p.face_b(j);
+        if s > margin {
+            return Err(SatAxis::FaceB(g as u16));
+        }
+        if s > face_b.separation {
+            face_b = FaceBest {
+                index: g,
+                separation: s,
+            };
+        }
+    }
+    // (i, j, separation, t·L, |L|) of the best pair, pairs in order (0, 0), (0, 1), ...
+    let mut best = (0usize, 0usize, f32::NEG_INFINITY, 0.0f32, 1.0f32);
+    macro_rules! pair {
+        ($i:literal, $j:literal) => {
+            if let Some((s, tl, len)) = p.edge::<$i, $j>() {
+                if s > margin {
+                    let n = p.edge_normal($i, $j, tl, len);
+                    let (ea, _) = box_edge_along(a, $i, n);
+                    let (eb, _) = box_edge_along(b, $j, p.r.transpose_mul_vec(-n));
+                    return Err(SatAxis::Edges(ea as u16, eb as u16));
+                }
+                if s > best.2 {
+                    best = ($i, $j, s, tl, len);
+                }
+            }
+        };
+    }
+    pair!(0, 0);
+    pair!(0, 1);
+    pair!(0, 2);
+    pair!(1, 0);
+    pair!(1, 1);
+    pair!(1, 2);
+    pair!(2, 0);
+    pair!(2, 1);
+    pair!(2, 2);
+    let (i, j, s, tl, len) = best;
+    let edge = (s > f32::NEG_INFINITY).then(|| {
+        let n = p.edge_normal(i, j, tl, len);
+        let (index_a, _) = box_edge_along(a, i, n);
+        let (index_b, _) = box_edge_along(b, j, p.r.transpose_mul_vec(-n));
+        EdgeBest {
+            index_a,
+            index_b,
+            normal: n,
+            separation: s,
+        }
+    });
+    Ok((face_a, face_b, edge))
+}
+
+// ---------------------------------------------------------------------------------------
+// Capsule against box.
+// ---------------------------------------------------------------------------------------
+
+/// Capsule `c` (A, local frame) against box `b` at `b_in_a`, by the separating axis test on
+/// the capsule's segment and the box, in the box's frame. The segment's Minkowski sum with
+/// the box has face normals `e_k` (the box's faces) and `e_k × d` (`d` the segment, one
+/// axis per box edge direction; its Gauss map is the great circle perpendicular to `d`,
+/// which crosses every box edge direction's circle at `±(e_k × d)`), so six axes give the
+/// core separation exactly when the cores overlap. The capsule's separation is that minus
+/// the radius.
+///
+/// - A box face axis: the segment clipped against the face's side planes, up to 2 points
+///   (one when the segment stands on the face: the far end is beyond the margin): the
+///   capsule's surface point facing the face at each clipped segment point (end cap or
+///   cylinder) and the segment point's projection on the face.
+/// - An edge axis: one point from the closest points of the segment and the box edge.
+///
+/// With the same guard and fallback as the polytope pairs.
+pub(crate) fn capsule_cuboid(
+    c: &Capsule,
+    b: &Cuboid,
+    b_in_a: &Iso,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let (s0, s1) = c.segment();
+    let p0 = b_in_a.inverse_transform_point(s0);
+    let p1 = b_in_a.inverse_transform_point(s1);
+    let d = p1 - p0;
+    let h = b.half_extents;
+    let r = c.radius;
+    // Core separation beyond which the capsule is apart by more than the margin.
+    let limit = margin + r;
+    // Box faces (box frame, from the box towards the capsule), face order 0..6.
+    let mut face = FaceBest {
+        index: 0,
+        separation: f32::NEG_INFINITY,
+    };
+    for k in 0..3 {
+        let (lo, hi) = if p0[k] <= p1[k] {
+            (p0[k], p1[k])
+        } else {
+            (p1[k], p0[k])
+        };
+        for (f, s) in [(2 * k, -h[k] - hi), (2 * k + 1, lo - h[k])] {
+            if s > limit {
+                return SatOutcome::Separated;
+            }
+            if s > face.separation {
+                face = FaceBest {
+                    index: f,
+                    separation: s,
+                };
+            }
+        }
+    }
+    // Segment × box edge directions.
+    let dd = d.length_squared();
+    let mut edge: Option<(usize, Vec3, f32)> = None;
+    for k in 0..3 {
+        let l = axis_vector(k, 1.0).cross(d);
+        let ll = l.length_squared();
+        let crossing = ll > EDGE_PARALLEL_SIN * EDGE_PARALLEL_SIN * dd; // false for NaN too
+        if !crossing {
+            continue;
+        }
+        let len = scalar::sqrt(ll);
+        let cl = l.dot(p0);
+        let s = (scalar::abs(cl) - l.abs().dot(h)) / len;
+        if s > limit {
+            return SatOutcome::Separated;
+        }
+        if edge.is_none_or(|(_, _, es)| s > es) {
+            edge = Some((k, l * (scalar::sign(cl) / len), s));
+        }
+    }
+    let tol = SAT_TOLERANCE
+        * (b_in_a.position.abs().max_elem() + h.max_elem() + c.half_height + c.radius);
+    if !face.separation.is_finite() {
+        return SatOutcome::Fallback;
+    }
+    // The cores' separation by the six axes: positive means the segment is apart from the
+    // box (a lower bound of their distance).
+    let core_separation = edge.map_or(face.separation, |(_, _, s)| scalar::max(s, face.separation));
+    // Rotation of the box frame into A's.
+    let to_a = |p: Vec3| b_in_a.transform_point(p);
+    let outcome = match edge {
+        Some((k, n, s)) if s > face.separation + tol => {
+            // The box's edge along axis k that supports n.
+            let (_, Some(e)) = box_edge_along(b, k, n) else {
+                return SatOutcome::Fallback;
+            };
+            let (ts, te) = segment_closest_points(p0, p1, e.p0, e.p1);
+            let inside = ts > 0.0 && ts < 1.0 && te > 0.0 && te < 1.0;
+            if s > 0.0 && !inside {
+                // Apart, and a segment end or an edge end is the closest: see below.
+                SatOutcome::Fallback
+            } else {
+                let on_segment = p0 + d * ts;
+                let on_box = e.p0 + (e.p1 - e.p0) * te;
+                let normal = b_in_a.transform_vector(-n);
+                let id = ContactId {
+                    a: feature_at(ts),
+                    b: FeatureId::edge(e.v0, e.v1),
+                };
+                out.reset(normal);
+                out.push_within(
+                    Candidate::new(to_a(on_segment - n * r), to_a(on_box), normal, id),
+                    margin,
+                );
+                if out.len > 0 {
+                    SatOutcome::Contact
+                } else {
+                    SatOutcome::Fallback
+                }
+            }
+        }
+        _ => {
+            let f = b.face(face.index / 2, face.index % 2 == 1);
+            let nf = f.normal;
+            let mut buffers = clip::ClipBuffers::new();
+            let clipped = buffers.segment(
+                &f,
+                p0,
+                p1,
+                [FeatureId::vertex(0), FeatureId::vertex(1)],
+                FeatureId::edge(0, 1),
+            );
+            let normal = b_in_a.transform_vector(-nf);
+            let f0 = f.vertices[0];
+            // The capsule's surface point facing the face at a segment point: on the end
+            // cap, along −n, when n points out past that end of the segment; else on the
+            // cylinder, along the part of n perpendicular to the segment (a tilted
+            // capsule's middle is `r cos α` above its axis, not `r`).
+            let along = nf.dot(d);
+            let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
+            let cylinder = across.normalize_or(nf);
+            out.reset(normal);
+            for v in clipped.vertices() {
+                // Height (m) of the segment point above the face plane.
+                let height = (v.point - f0).dot(nf);
+                let id = ContactId {
+                    a: v.inc_id,
+                    b: v.ref_id,
+                };
+                let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
+                    || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
+                let toward_face = if past_end { nf } else { cylinder };
+                let point_a = to_a(v.point - toward_face * r);
+                let point_b = to_a(v.point - nf * height);
+                out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
+            }
+            let guard = face.separation - r + GUARD_FACTOR * tol;
+            if out.len > 0 && out.min_separation() <= guard {
+                SatOutcome::Contact
+            } else {
+                SatOutcome::Fallback
+            }
+        }
+    };
+    if outcome == SatOutcome::Fallback && core_separation > 0.0 {
+        // Apart, but closest at a box vertex or a segment end the axes do not name.
+        return segment_box_apart(c, b, (p0, p1), b_in_a, margin, out);
+    }
+    outcome
+}
+
+/// A capsule whose core segment `p0 → p1` (box frame) is apart from box `b`: the exact
+/// closest points, the nearest of each segment end against the box (the end clamped to
+/// the box) and the segment against each of the 12 box edges (Ericson 5.1.9). When the
+/// two are apart their closest pair is one of those: an end over a face, edge or vertex,
+/// or an inner segment point against an edge or a vertex (an edge's end). One point, along
+/// the closest points' direction; ids (segment feature, box face, edge or vertex).
+fn segment_box_apart(
+    c: &Capsule,
+    b: &Cuboid,
+    (p0, p1): (Vec3, Vec3),
+    b_in_a: &Iso,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let h = b.half_extents;
+    let d = p1 - p0;
+    let clamp = |p: Vec3| {
+        Vec3::new(
+            scalar::clamp(p.x, -h.x, h.x),
+            scalar::clamp(p.y, -h.y, h.y),
+            scalar::clamp(p.z, -h.z, h.z),
+        )
+    };
+    // (squared gap, segment parameter, segment point, box point, box feature); ends first,
+    // then edges in index order, strict `<`.
+    let mut best: Option<(f32, f32, Vec3, Vec3, FeatureId)> = None;
+    let mut consider = |t: f32, on_segment: Vec3, on_box: Vec3, feature: FeatureId| {
+        let gap2 = (on_segment - on_box).length_squared();
+        if best.is_none_or(|(g, ..)| gap2 < g) {
+            best = Some((gap2, t, on_segment, on_box, feature));
+        }
+    };
+    for (t, p) in [(0.0, p0), (1.0, p1)] {
+        consider(t, p, clamp(p), super::analytic::clamped_feature(p, h));
+    }
+    for e in 0..12 {
+        let Some(edge) = Polytope::edge(b, e) else {
+            continue;
+        };
+        let (s, u) = segment_closest_points(p0, p1, edge.p0, edge.p1);
+        let feature = match feature_at(u) {
+            f if f == FeatureId::vertex(0) => FeatureId::vertex(edge.v0),
+            f if f == FeatureId::vertex(1) => FeatureId::vertex(edge.v1),
+            _ => FeatureId::edge(edge.v0, edge.v1),
+        };
+        consider(s, p0 + d * s, edge.p0 + (edge.p1 - edge.p0) * u, feature);
+    }
+    let Some((_, t, on_segment, on_box, feature)) = best else {
+        return SatOutcome::Fallback;
+    };
+    let Some((n, gap)) = (on_segment - on_box).normalize_and_length() else {
+        return SatOutcome::Fallback;
+    };
+    let r = c.radius;
+    let within = gap - r <= margin; // false for NaN too
+    if !within {
+        return SatOutcome::Separated;
+    }
+    let normal = b_in_a.transform_vector(-n);
+    let id = ContactId {
+        a: feature_at(t),
+        b: feature,
+    };
+    out.reset(normal);
+    out.push_within(
+        Candidate::new(
+            b_in_a.transform_point(on_segment - n * r),
+            b_in_a.transform_point(on_box),
+            normal,
+            id,
+        ),
+        margin,
+    );
+    if out.len > 0 {
+        SatOutcome::Contact
+    } else {
+        SatOutcome::Fallback
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Quat;
+    use crate::rng::SplitMix64;
+
+    /// The arcs' crossing by brute force: the two great circles meet at `±q`,
+    /// `q = (b × a) × (d × c)`; the arcs cross when one of them lies on both (a point `x`
+    /// is on arc `(p, r)` when it is a non-negative combination `x = α p + β r`).
+    fn arcs_cross(a: Vec3, b: Vec3, c: Vec3, d: Vec3) -> Option<bool> {
+        let q = b.cross(a).cross(d.cross(c)).normalize_and_length()?.0;
+        let on_arc = |x: Vec3, p: Vec3, r: Vec3| {
+            // Solve x = α p + β r in the plane of p and r.
+            let (pp, pr, rr) = (p.dot(p), p.dot(r), r.dot(r));
+            let (xp, xr) = (x.dot(p), x.dot(r));
+            let det = pp * rr - pr * pr;
+            let alpha = (xp * rr - xr * pr) / det;
+            let beta = (xr * pp - xp * pr) / det;
+            alpha > 1e-4 && beta > 1e-4
+        };
+        Some((on_arc(q, a, b) && on_arc(q, c, d)) || (on_arc(-q, a, b) && on_arc(-q, c, d)))
+    }
+
+    #[test]
+    fn gauss_map_test_matches_brute_force_arc_crossing() {
+        let mut rng = SplitMix64::new(11);
+        let mut crossing = 0;
+        for _ in 0..20000 {
+            let (a, b, c, d) = (
+                rng.unit_vector(),
+                rng.unit_vector(),
+                rng.unit_vector(),
+                rng.unit_vector(),
+            );
+            // Arcs shorter than a half circle, as a convex polytope's are.
+            if a.dot(b) < -0.9 || c.dot(d) < -0.9 {
+                continue;
+            }
+            let Some(expected) = arcs_cross(a, b, c, d) else {
+                continue;
+            };
+            // A's edge along −(b × a), B's arc (c, d) = (−n0_B, −n1_B), edge along −(d × c).
+            let fr = Frame::new(&Iso::IDENTITY);
+            let arc = ArcA::new(
+                PolyEdge {
+                    v0: 0,
+                    v1: 1,
+                    p0: Vec3::ZERO,
+                    p1: -b.cross(a),
+                    n0: a,
+                    n1: b,
+                },
+                &fr,
+            );
+            let eb = PolyEdge {
+                v0: 0,
+                v1: 1,
+                p0: Vec3::ZERO,
+                p1: -d.cross(c),
+                n0: -c,
+                n1: -d,
+            };
+            let dots = (eb.n0.dot(arc.vector_b), eb.n1.dot(arc.vector_b));
+            let got = is_minkowski_face(&arc, dots.0, dots.1, eb.p1 - eb.p0);
+            // Near-tangent cases are rounding either way; compare clear ones only.
+            let margin = [a, b]
+                .iter()
+                .map(|x| x.dot(d.cross(c).normalize_or(Vec3::Y)).abs())
+                .chain(
+                    [c, d]
+                        .iter()
+                        .map(|x| x.dot(b.cross(a).normalize_or(Vec3::Y)).abs()),
+                )
+                .fold(f32::INFINITY, f32::min);
+            if margin < 1e-3 {
+                continue;
+            }
+            assert_eq!(got, expected, "{a:?} {b:?} {c:?} {d:?}");
+            crossing += got as u32;
+        }
+        assert!(crossing > 1000, "{crossing}");
+    }
+
+    #[test]
+    fn box_edges_follow_the_winding_convention() {
+        let c = Cuboid::new(Vec3::new(0.5, 0.7, 0.9)).unwrap();
+        for e in 0..12 {
+            let edge = Polytope::edge(&c, e).unwrap();
+            // n1 × n0 points along p0 − p1.
+            let along = edge.n1.cross(edge.n0).dot(edge.p0 - edge.p1);
+            assert!(along > 0.0, "{e} {edge:?}");
+            // Both end points lie on both faces.
+            for p in [edge.p0, edge.p1] {
+                for n in [edge.n0, edge.n1] {
+                    let f = (0..6).find(|&f| Polytope::plane(&c, f).0 == n).unwrap();
+                    let (m, d) = Polytope::plane(&c, f);
+                    assert!((m.dot(p) - d).abs() < 1e-6);
+                }
+            }
+            // The face along n0 runs p0 → p1 counter-clockwise: its polygon has the
+            // directed edge.
+            let f = (0..6)
+                .find(|&f| Polytope::plane(&c, f).0 == edge.n0)
+                .unwrap();
+            let poly = Polytope::polygon(&c, f);
+            let ids = &poly.vertex_ids[..poly.len as usize];
+            let k = ids
+                .iter()
+                .position(|v| *v == FeatureId::vertex(edge.v0))
+                .unwrap();
+            assert_eq!(ids[(k + 1) % 4], FeatureId::vertex(edge.v1), "{e}");
+        }
+    }
+
+    #[test]
+    fn box_edge_along_matches_the_edge_table() {
+        let c = Cuboid::new(Vec3::new(0.5, 0.7, 0.9)).unwrap();
+        let mut rng = SplitMix64::new(14);
+        for _ in 0..200 {
+            let dir = rng.unit_vector();
+            for i in 0..3 {
+                let (e, quick) = box_edge_along(&c, i, dir);
+                let quick = quick.unwrap();
+                let full = Polytope::edge(&c, e).unwrap();
+                assert_eq!(
+                    (quick.v0, quick.v1, quick.p0, quick.p1),
+                    (full.v0, full.v1, full.p0, full.p1)
+                );
+                // It supports dir among the edges along axis i.
+                for k in 0..4 {
+                    let other = Polytope::edge(&c, 4 * i + k).unwrap();
+                    assert!(other.p0.dot(dir) <= full.p0.dot(dir) + 1e-6);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn hull_edges_follow_the_winding_convention() {
+        let mut rng = SplitMix64::new(12);
+        for _ in 0..20 {
+            let pts: std::vec::Vec<Vec3> = (0..24).map(|_| rng.unit_vector()).collect();
+            let h = ConvexHull::new(&pts).unwrap();
+            assert!(h.is_closed());
+            // Euler: V − E + F = 2 for a hull whose faces are not split.
+            let v = h.vertices().len() as i32;
+            let e = h.edge_count() as i32;
+            let f = h.face_count() as i32;
+            assert_eq!(v - e + f, 2);
+            for i in 0..h.edge_count() {
+                let edge = Polytope::edge(&h, i).unwrap();
+                assert!(edge.v0 < edge.v1);
+                let along = edge.n1.cross(edge.n0).dot(edge.p0 - edge.p1);
+                assert!(along > 0.0, "{edge:?}");
+            }
+        }
+    }
+
+    /// The closed-form box test and the generic polytope test find the same separations.
+    #[test]
+    fn box_closed_form_matches_the_generic_test() {
+        let mut rng = SplitMix64::new(13);
+        let a = Cuboid::new(Vec3::new(0.5, 0.3, 0.8)).unwrap();
+        let b = Cuboid::new(Vec3::new(0.4, 0.6, 0.2)).unwrap();
+        let mut compared = 0;
+        for _ in 0..2000 {
+            let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.8), rng.rotation());
+            let fr = Frame::new(&b_in_a);
+            let p = BoxPair::new(&a, &b, &fr);
+            let margin = 0.05;
+            let closed = box_query(&a, &b, &p, margin);
+            let generic = query(&a, &b, &fr, margin);
+            match (closed, generic) {
+                (Ok((fa, fb, ea)), Ok((ga, gb, eg))) => {
+                    compared += 1;
+                    assert!((fa.separation - ga.separation).abs() < 1e-5);
+                    assert!((fb.separation - gb.separation).abs() < 1e-5);
+                    let es = ea.map_or(f32::NEG_INFINITY, |e| e.separation);
+                    let gs = eg.map_or(f32::NEG_INFINITY, |e| e.separation);
+                    assert!(
+                        (es - gs).abs() < 1e-4 || (es < -1.0 && gs < -1.0),
+                        "{es} {gs}"
+                    );
+                    if let (Some(ea), Some(eg)) = (ea, eg) {
+                        if (ea.separation - eg.separation).abs() < 1e-6 {
+                            assert!(ea.normal.dot(eg.normal) > 0.999);
+                        }
+                    }
+                }
+                (Err(_), Err(_)) => {}
+                (c, g) => {
+                    // Only right at the margin may they disagree.
+                    let s = |r: &Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis>| {
+                        r.as_ref().map_or(margin, |(fa, fb, e)| {
+                            fa.separation
+                                .max(fb.separation)
+                                .max(e.map_or(f32::NEG_INFINITY, |e| e.separation))
+                        })
+                    };
+                    assert!((s(&c) - margin).abs() < 1e-4 && (s(&g) - margin).abs() < 1e-4);
+                }
+            }
+        }
+        assert!(compared > 500, "{compared}");
+    }
+
+    #[test]
+    fn capsule_standing_on_a_box_gives_one_point_lying_two() {
+        let b = Cuboid::new(Vec3::new(2.0, 0.5, 2.0)).unwrap();
+        let c = Capsule::new(0.5, 0.2).unwrap();
+        // Capsule (A) at the origin; the box below it.
+        for (rot, expect) in [
+            (Quat::IDENTITY, 1),
+            (
+                Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2),
+                2,
+            ),
+        ] {
+            let below = if expect == 1 { 0.69 } else { 0.19 };
+            let pose_box = Iso::new(
+                rot.conjugate().rotate(Vec3::new(0.0, -0.5 - below, 0.0)),
+                rot.conjugate(),
+            );
+            let mut m = LocalManifold::new(Vec3::Y);
+            match capsule_cuboid(&c, &b, &pose_box, 0.02, &mut m) {
+                SatOutcome::Contact => {
+                    assert_eq!(m.len, expect, "{m:?}");
+                    for p in m.points() {
+                        assert!((p.separation + 0.01).abs() < 1e-5, "{p:?}");
+                    }
+                }
+                other => panic!("{other:?}"),
+            }
+        }
+    }
+}

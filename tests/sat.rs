@@ -1,0 +1,510 @@
+//! The fast narrow-phase paths of `contact` — the separating axis test for box and hull
+//! pairs, the sphere–box and capsule–box closed forms — against the GJK/EPA oracle on the
+//! benchmark query sets (`carom::scenes::queries`), resting contacts, feature-id stability,
+//! symmetry, and the property that the pair cache never changes an answer.
+
+use carom::collide::{
+    contact, contact_cached, contact_gjk_epa, distance, penetration, ContactId, Manifold,
+    PairCache, SatAxis, SimplexCache, SAT_TOLERANCE,
+};
+use carom::math::{Iso, Quat, Vec3};
+use carom::props::{distance_properties, manifold_properties, penetration_properties};
+use carom::rng::SplitMix64;
+use carom::scenes::queries::{
+    self, PoseQuery, QuerySet, BALL_RADIUS, BOX_HALF, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
+};
+use carom::shape::{ConvexHull, FeatureKind, Shape};
+
+/// Within this of touching (m) the oracle and the fast path may disagree about apart or
+/// overlapping: both stop within f32 rounding of a few operations on 1 m shapes.
+const TOUCHING: f32 = 1.0e-5;
+/// The deepest point's separation against GJK distance / −EPA depth (m).
+const DEPTH: f32 = 1.0e-4;
+/// A face contact's normal against the oracle's (rad).
+const ANGLE: f32 = 1.0e-3;
+/// How far a contact point may be off its shape's surface (m): rounding of the
+/// world ↔ local transforms at a 1 m scale.
+const SURFACE: f32 = 1.0e-5;
+
+/// The benchmark hulls.
+fn hulls() -> Vec<ConvexHull> {
+    let mut clouds = vec![[Vec3::ZERO; HULL_POINTS]; HULLS];
+    queries::hull_clouds(&mut clouds);
+    clouds.iter().map(|c| ConvexHull::new(c).unwrap()).collect()
+}
+
+/// The query set's poses.
+fn poses(set: QuerySet) -> Vec<PoseQuery> {
+    let mut qs = vec![PoseQuery::default(); PAIRS];
+    set.fill(&mut qs);
+    qs
+}
+
+/// The pairs of one query set as `(name, a, b, query)`: the three benchmark sets, and box
+/// against hull on the hull set's poses (both orders).
+fn pairs<'h>(hulls: &'h [ConvexHull]) -> Vec<(&'static str, Shape<'h>, Shape<'h>, PoseQuery)> {
+    let ball = Shape::sphere(BALL_RADIUS).unwrap();
+    let cube = Shape::cuboid(Vec3::splat(BOX_HALF)).unwrap();
+    let hull = |i: u8| Shape::hull(&hulls[usize::from(i) % hulls.len()]);
+    let mut out = Vec::new();
+    for q in poses(QuerySet::BoxBox) {
+        out.push(("box_box", cube, cube, q));
+    }
+    for q in poses(QuerySet::BallBox) {
+        out.push(("ball_box", ball, cube, q));
+    }
+    for q in poses(QuerySet::HullHull) {
+        out.push(("hull_hull", hull(q.hull_a), hull(q.hull_b), q));
+    }
+    for (k, q) in poses(QuerySet::HullHull).into_iter().enumerate().take(1024) {
+        if k % 2 == 0 {
+            out.push(("box_hull", cube, hull(q.hull_b), q));
+        } else {
+            out.push(("hull_box", hull(q.hull_a), cube, q));
+        }
+    }
+    out
+}
+
+/// The oracle: GJK distance when apart, −EPA depth when overlapping, with its normal.
+fn oracle(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> (f32, Vec3) {
+    let d = distance(a, pa, b, pb, &mut SimplexCache::default()).unwrap();
+    if d.distance > 0.0 {
+        return (d.distance, d.normal);
+    }
+    match penetration(a, pa, b, pb).unwrap() {
+        Some(p) => (-p.depth, p.normal),
+        None => (0.0, d.normal),
+    }
+}
+
+/// Signed distance of local point `p` to the shape's surface along its bounding planes
+/// (0 on the surface, negative inside): exact on faces.
+fn plane_distance(s: &Shape, p: Vec3) -> f32 {
+    match s {
+        Shape::Cuboid(c) => (p.abs() - c.half_extents).max_elem(),
+        Shape::Hull(h) => (0..h.face_count())
+            .map(|f| {
+                let (n, d) = h.plane(f);
+                n.dot(p) - d
+            })
+            .fold(f32::NEG_INFINITY, f32::max),
+        Shape::Sphere(b) => p.length() - b.radius,
+        Shape::Capsule(c) => {
+            let y = p.y.clamp(-c.half_height, c.half_height);
+            (p - Vec3::new(0.0, y, 0.0)).length() - c.radius
+        }
+        _ => 0.0,
+    }
+}
+
+/// The angle between two unit vectors, accurate for small angles (from the cross
+/// product; `acos` of an f32 dot product cannot resolve below about 5e-4 rad).
+fn angle(u: Vec3, v: Vec3) -> f32 {
+    if u.dot(v) <= 0.0 {
+        return core::f32::consts::PI;
+    }
+    u.cross(v).length().min(1.0).asin()
+}
+
+/// A contact whose points come from a face: some point pairs a face with a feature.
+fn is_face_contact(m: &Manifold) -> bool {
+    m.points()
+        .iter()
+        .any(|p| p.id.a.kind() == FeatureKind::Face || p.id.b.kind() == FeatureKind::Face)
+}
+
+/// The axis-choice tolerance of the pair (see `SAT_TOLERANCE`): the most by which the
+/// chosen axis may be shallower than the best one.
+fn bias(a: &Shape, b: &Shape, q: &PoseQuery) -> f32 {
+    let extent = |s: &Shape| match s {
+        Shape::Cuboid(c) => c.half_extents.max_elem(),
+        Shape::Hull(h) => h.tolerance() / ConvexHull::TOLERANCE,
+        _ => 0.0,
+    };
+    let t = q.pose_a.inv_mul(&q.pose_b).position;
+    SAT_TOLERANCE * (t.abs().max_elem() + extent(a) + extent(b))
+}
+
+#[test]
+fn fast_paths_agree_with_gjk_epa_on_the_query_sets() {
+    let hulls = hulls();
+    let mut ties = 0;
+    let mut face_contacts = 0;
+    let mut found = 0;
+    for (name, a, b, q) in pairs(&hulls) {
+        let (s, n) = oracle(&a, &q.pose_a, &b, &q.pose_b);
+        let m = contact(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN).unwrap();
+        let Some(m) = m else {
+            assert!(s > CONTACT_MARGIN - TOUCHING, "{name} {q:?}: None at {s}");
+            continue;
+        };
+        found += 1;
+        let ms = m.min_separation();
+        if s.abs() > TOUCHING {
+            assert_eq!(ms > 0.0, s > 0.0, "{name} {q:?}: {ms} vs {s}");
+        }
+        assert!((ms - s).abs() <= DEPTH, "{name} {q:?}: depth {ms} vs {s}");
+        for p in m.points() {
+            let off_a = plane_distance(&a, p.local_a);
+            let off_b = plane_distance(&b, p.local_b);
+            assert!(
+                off_a.abs() <= SURFACE && off_b.abs() <= SURFACE,
+                "{name} {q:?}: {p:?}"
+            );
+        }
+        if is_face_contact(&m) {
+            face_contacts += 1;
+            let off = angle(m.normal, n);
+            if off > ANGLE {
+                // Only a near-tie the axis bias decided: the oracle's axis is better, by
+                // no more than the documented tolerance.
+                let better = s - ms;
+                assert!(
+                    better >= -TOUCHING && better <= bias(&a, &b, &q),
+                    "{name} {q:?}: normal off by {off} rad, {ms} vs {s}"
+                );
+                ties += 1;
+            }
+        }
+    }
+    eprintln!("{found} contacts, {face_contacts} face contacts, {ties} bias ties");
+    assert!(
+        found > 8000 && face_contacts > 2000,
+        "{found} {face_contacts}"
+    );
+    // Ties are rare: one in a thousand face contacts at most.
+    assert!(ties * 1000 <= face_contacts, "{ties} of {face_contacts}");
+}
+
+#[test]
+fn the_general_path_agrees_too() {
+    // contact_gjk_epa stays available as the reference: the same answers within its own
+    // guard (1 mm + 0.2 %).
+    let hulls = hulls();
+    for (name, a, b, q) in pairs(&hulls).into_iter().step_by(7) {
+        let fast = contact(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN).unwrap();
+        let slow = contact_gjk_epa(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN).unwrap();
+        match (fast, slow) {
+            (Some(f), Some(s)) => {
+                let (fs, ss) = (f.min_separation(), s.min_separation());
+                assert!((fs - ss).abs() <= 1.0e-3 + 0.002 * ss.abs(), "{name} {q:?}");
+            }
+            (None, None) => {}
+            (f, s) => {
+                let sep = f.or(s).map_or(0.0, |m| m.min_separation());
+                assert!(sep > CONTACT_MARGIN - 1.0e-3, "{name} {q:?}: {f:?} {s:?}");
+            }
+        }
+    }
+}
+
+#[test]
+fn swapped_pairs_have_the_flipped_normal_and_the_same_depth() {
+    let hulls = hulls();
+    let mut ties = 0;
+    let mut compared = 0;
+    for (name, a, b, q) in pairs(&hulls) {
+        let m = contact(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN).unwrap();
+        let w = contact(&b, &q.pose_b, &a, &q.pose_a, CONTACT_MARGIN).unwrap();
+        let (m, w) = match (m, w) {
+            (Some(m), Some(w)) => (m, w),
+            (None, None) => continue,
+            (m, w) => {
+                let s = m.or(w).map_or(0.0, |m| m.min_separation());
+                assert!(s > CONTACT_MARGIN - TOUCHING, "{name} {q:?}");
+                continue;
+            }
+        };
+        compared += 1;
+        let (ms, ws) = (m.min_separation(), w.min_separation());
+        assert!((ms - ws).abs() <= DEPTH, "{name} {q:?}: {ms} vs {ws}");
+        if angle(m.normal, -w.normal) > ANGLE {
+            // Each order prefers its own A's face: a near-tie of two faces.
+            assert!((ms - ws).abs() <= bias(&a, &b, &q), "{name} {q:?}");
+            ties += 1;
+        }
+    }
+    eprintln!("{compared} compared, {ties} ties");
+    assert!(
+        compared > 8000 && ties * 1000 <= compared,
+        "{compared} {ties}"
+    );
+}
+
+/// Every float of a manifold, by bits, and every id: "the same output".
+fn bits(m: &Option<Manifold>) -> Vec<u32> {
+    let Some(m) = m else { return vec![u32::MAX] };
+    let v = |x: Vec3| [x.x.to_bits(), x.y.to_bits(), x.z.to_bits()];
+    let mut out = vec![m.len as u32];
+    out.extend(v(m.normal));
+    for p in m.points() {
+        for x in [p.point_a, p.point_b, p.local_a, p.local_b] {
+            out.extend(v(x));
+        }
+        out.extend([p.separation.to_bits(), p.id.a.0, p.id.b.0]);
+    }
+    out
+}
+
+#[test]
+fn the_result_never_depends_on_the_cache() {
+    let hulls = hulls();
+    let garbage = [
+        SatAxis::FaceA(u16::MAX),
+        SatAxis::FaceB(6),
+        SatAxis::FaceA(0),
+        SatAxis::Edges(11, 999),
+        SatAxis::Edges(0, 0),
+        SatAxis::Edges(u16::MAX, 3),
+    ];
+    let mut stale = PairCache::default();
+    let mut hits = 0;
+    for (k, (name, a, b, q)) in pairs(&hulls).into_iter().enumerate() {
+        let go = |cache: &mut PairCache| {
+            contact_cached(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN, cache).unwrap()
+        };
+        let mut fresh = PairCache::default();
+        let reference = go(&mut fresh);
+        assert_eq!(
+            bits(&reference),
+            bits(&contact(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN).unwrap()),
+            "{name}: contact() is contact_cached() with a fresh cache"
+        );
+        // Stale: the last query's cache (another pose, often other shapes).
+        assert_eq!(
+            bits(&go(&mut stale)),
+            bits(&reference),
+            "{name} {q:?} stale"
+        );
+        // Warm: this query's own cache, used again.
+        let mut warm = fresh;
+        assert_eq!(bits(&go(&mut warm)), bits(&reference), "{name} {q:?} warm");
+        if reference.is_none() && fresh.axis != SatAxis::Unknown {
+            hits += 1;
+        }
+        // Garbage: indices out of range and unrelated axes.
+        let mut bad = PairCache {
+            axis: garbage[k % garbage.len()],
+        };
+        assert_eq!(
+            bits(&go(&mut bad)),
+            bits(&reference),
+            "{name} {q:?} garbage"
+        );
+    }
+    // The box and hull pairs that are apart leave the separating axis in the cache.
+    assert!(hits > 1000, "{hits}");
+}
+
+#[test]
+fn narrow_phase_properties_hold_on_the_query_sets() {
+    // The fuzz target's property functions, on every fourth query of every set.
+    let hulls = hulls();
+    for (name, a, b, q) in pairs(&hulls).into_iter().step_by(4) {
+        let (pa, pb) = (&q.pose_a, &q.pose_b);
+        assert_eq!(distance_properties(&a, pa, &b, pb), Ok(()), "{name} {q:?}");
+        assert_eq!(
+            penetration_properties(&a, pa, &b, pb),
+            Ok(()),
+            "{name} {q:?}"
+        );
+        assert_eq!(
+            manifold_properties(&a, pa, &b, pb, CONTACT_MARGIN),
+            Ok(()),
+            "{name} {q:?}"
+        );
+    }
+}
+
+/// A box of half-extents `h` lying on a box of half-extents `g` whose top is `y = 0`:
+/// (lower, its pose, upper, its pose), the upper turned by `rotation` and lowered so its
+/// lowest point is `depth` below the top.
+fn stacked(
+    g: Vec3,
+    h: Vec3,
+    rotation: Quat,
+    offset: Vec3,
+    depth: f32,
+) -> [(Shape<'static>, Iso); 2] {
+    let lower = Shape::cuboid(g).unwrap();
+    let upper = Shape::cuboid(h).unwrap();
+    let lowest = (0..8)
+        .map(|i| rotation.rotate(upper.core_vertex(i)).y)
+        .fold(f32::INFINITY, f32::min);
+    [
+        (lower, Iso::from_position(Vec3::new(0.0, -g.y, 0.0))),
+        (
+            upper,
+            Iso::new(offset + Vec3::new(0.0, -lowest - depth, 0.0), rotation),
+        ),
+    ]
+}
+
+#[test]
+fn resting_box_gives_four_points_an_edge_two_a_vertex_one() {
+    let g = Vec3::new(2.0, 0.5, 2.0);
+    let h = Vec3::new(0.5, 0.3, 0.4);
+    let tilt_edge = Quat::from_axis_angle(Vec3::Z, 0.5);
+    let tilt_vertex = Quat::from_axis_angle(Vec3::new(1.0, 0.0, -1.0).normalize_or(Vec3::X), 0.7);
+    for yaw in [0.0f32, 0.3, 1.1, 2.9] {
+        let turn = Quat::from_axis_angle(Vec3::Y, yaw);
+        for (rotation, expected) in [(turn, 4), (turn * tilt_edge, 2), (turn * tilt_vertex, 1)] {
+            for depth in [0.004f32, 0.01] {
+                let [(a, pa), (b, pb)] = stacked(g, h, rotation, Vec3::new(0.3, 0.0, -0.2), depth);
+                let m = contact(&a, &pa, &b, &pb, CONTACT_MARGIN).unwrap().unwrap();
+                assert_eq!(m.len, expected, "yaw {yaw} {m:?}");
+                // The lower box's top face normal, exactly.
+                assert_eq!(m.normal, Vec3::Y, "yaw {yaw}");
+                for p in m.points() {
+                    assert!((p.separation + depth).abs() < 1.0e-5, "{p:?}");
+                }
+                // The other order: the normal is the lower box's face turned round.
+                let w = contact(&b, &pb, &a, &pa, CONTACT_MARGIN).unwrap().unwrap();
+                assert_eq!(w.len, expected);
+                assert!(angle(w.normal, -Vec3::Y) < 1.0e-6, "{w:?}");
+            }
+        }
+    }
+}
+
+/// Sorted ids of a manifold.
+fn ids(m: &Manifold) -> Vec<ContactId> {
+    let mut v: Vec<ContactId> = m.points().iter().map(|p| p.id).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_stacked_box_shifted_by_a_millimetre_keeps_its_ids() {
+    let lower = Vec3::splat(0.5);
+    let cases = [
+        // Flat on an equal box, turned (corners over the edges: clipped points); flat
+        // and overhanging an edge; a shorter box on one of its edges.
+        (
+            Vec3::splat(0.5),
+            Quat::from_axis_angle(Vec3::Y, 0.3),
+            Vec3::ZERO,
+        ),
+        (
+            Vec3::splat(0.5),
+            Quat::from_axis_angle(Vec3::Y, 0.1),
+            Vec3::new(0.6, 0.0, 0.2),
+        ),
+        (
+            Vec3::new(0.5, 0.5, 0.4),
+            Quat::from_axis_angle(Vec3::Z, 0.6),
+            Vec3::new(0.1, 0.0, 0.0),
+        ),
+    ];
+    for (upper, rotation, offset) in cases {
+        let [(a, pa), (b, pb)] = stacked(lower, upper, rotation, offset, 0.005);
+        let m0 = contact(&a, &pa, &b, &pb, CONTACT_MARGIN).unwrap().unwrap();
+        let w0 = contact(&b, &pb, &a, &pa, CONTACT_MARGIN).unwrap().unwrap();
+        for shift in [Vec3::X, -Vec3::X, Vec3::Z, -Vec3::Z, Vec3::Y, -Vec3::Y] {
+            let moved = Iso::new(pb.position + shift * 0.001, pb.rotation);
+            let m1 = contact(&a, &pa, &b, &moved, CONTACT_MARGIN)
+                .unwrap()
+                .unwrap();
+            assert_eq!(ids(&m0), ids(&m1), "{rotation:?} {shift:?}");
+            let w1 = contact(&b, &moved, &a, &pa, CONTACT_MARGIN)
+                .unwrap()
+                .unwrap();
+            assert_eq!(ids(&w0), ids(&w1), "swapped {rotation:?} {shift:?}");
+        }
+    }
+}
+
+#[test]
+fn a_box_as_a_hull_gives_the_box_manifold() {
+    // The same geometry through the generic polytope test (a hull of the 8 corners) and
+    // through the closed-form box test.
+    let h = Vec3::new(0.5, 0.4, 0.3);
+    let cube = Shape::cuboid(h).unwrap();
+    let corners: Vec<Vec3> = (0..8).map(|i| cube.core_vertex(i)).collect();
+    let hull = ConvexHull::new(&corners).unwrap();
+    let as_hull = Shape::hull(&hull);
+    let mut rng = SplitMix64::new(31);
+    let mut compared = 0;
+    for _ in 0..2000 {
+        let pa = Iso::new(Vec3::ZERO, rng.rotation());
+        let pb = Iso::new(rng.unit_vector() * rng.range(0.5, 1.2), rng.rotation());
+        for (a, b) in [(&cube, &as_hull), (&as_hull, &cube), (&as_hull, &as_hull)] {
+            let boxes = contact(&cube, &pa, &cube, &pb, CONTACT_MARGIN).unwrap();
+            let other = contact(a, &pa, b, &pb, CONTACT_MARGIN).unwrap();
+            match (boxes, other) {
+                (Some(x), Some(y)) => {
+                    compared += 1;
+                    assert!((x.min_separation() - y.min_separation()).abs() < 1.0e-5);
+                    assert!(
+                        angle(x.normal, y.normal) < ANGLE || x.len == 1,
+                        "{x:?} {y:?}"
+                    );
+                }
+                (None, None) => {}
+                (x, y) => {
+                    let s = x.or(y).map_or(0.0, |m| m.min_separation());
+                    assert!(s > CONTACT_MARGIN - TOUCHING);
+                }
+            }
+        }
+    }
+    assert!(compared > 1000, "{compared}");
+}
+
+#[test]
+fn capsule_box_agrees_with_gjk_epa_and_lies_on_faces_with_two_points() {
+    let mut rng = SplitMix64::new(32);
+    let mut found = 0;
+    for _ in 0..3000 {
+        let h = Vec3::new(
+            rng.range(0.2, 1.0),
+            rng.range(0.2, 1.0),
+            rng.range(0.2, 1.0),
+        );
+        let cube = Shape::cuboid(h).unwrap();
+        let cap = Shape::capsule(rng.range(0.1, 0.8), rng.range(0.05, 0.4)).unwrap();
+        let pc = Iso::new(rng.unit_vector() * rng.range(0.0, 1.5), rng.rotation());
+        let pb = Iso::new(Vec3::ZERO, rng.rotation());
+        let (s, _) = oracle(&cap, &pc, &cube, &pb);
+        let Some(m) = contact(&cap, &pc, &cube, &pb, CONTACT_MARGIN).unwrap() else {
+            assert!(s > CONTACT_MARGIN - TOUCHING);
+            continue;
+        };
+        found += 1;
+        assert!((m.min_separation() - s).abs() <= DEPTH, "{m:?} {s}");
+        for p in m.points() {
+            assert!(plane_distance(&cap, p.local_a).abs() <= SURFACE);
+            assert!(plane_distance(&cube, p.local_b).abs() <= SURFACE);
+        }
+    }
+    assert!(found > 500, "{found}");
+    // Lying flat on the top face, 1 cm deep: two points under the ends, the face normal.
+    let cube = Shape::cuboid(Vec3::new(2.0, 0.5, 2.0)).unwrap();
+    let cap = Shape::capsule(0.5, 0.2).unwrap();
+    let pb = Iso::from_position(Vec3::new(0.0, -0.5, 0.0));
+    let lying = Quat::from_axis_angle(Vec3::Y, 0.4)
+        * Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2);
+    let pc = Iso::new(Vec3::new(0.3, 0.19, -0.1), lying);
+    let m = contact(&cap, &pc, &cube, &pb, CONTACT_MARGIN)
+        .unwrap()
+        .unwrap();
+    assert_eq!(m.len, 2);
+    assert!(angle(m.normal, -Vec3::Y) < 1.0e-6);
+    for p in m.points() {
+        assert!((p.separation + 0.01).abs() < 1.0e-5);
+    }
+    // Standing on its end: one point.
+    let pc = Iso::new(Vec3::new(0.3, 0.69, -0.1), Quat::IDENTITY);
+    let m = contact(&cap, &pc, &cube, &pb, CONTACT_MARGIN)
+        .unwrap()
+        .unwrap();
+    assert_eq!(m.len, 1);
+}
+
+#[test]
+fn the_pair_cache_is_small() {
+    // "Six bytes" in the PairCache docs: a tag and two u16 indices.
+    assert_eq!(core::mem::size_of::<PairCache>(), 6);
+    assert_eq!(PairCache::default().axis, SatAxis::Unknown);
+}
