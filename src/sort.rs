@@ -1,6 +1,8 @@
-//! In-place sorting without a panic path.
+//! Sorting and reordering slices in place, without a panic path.
 //!
-//! `core`'s `sort_unstable` carries panic paths (an order-violation check and bounds
+//! `core`'s `sort_unstable`, `rotate_left`, `copy_within` and `copy_from_slice` carry
+//! panic paths (an order-violation check, length asserts, bounds checks the optimiser
+//! keeps), which the panic-never firmware check refuses; `sort_unstable` (an order-violation check and bounds
 //! checks the optimiser keeps), which the panic-never firmware check refuses. This is a
 //! heapsort: O(n log n) compares in every case, no allocation, no recursion, and every
 //! access checked by `get`. It is not stable, but it is deterministic: the output depends
@@ -68,6 +70,30 @@ fn swap<T>(v: &mut [T], a: usize, b: usize) {
     }
 }
 
+/// Rotate `v` left by `k` places (`v[k]` comes first), by three reversals; `k` beyond
+/// the length rotates by `k % len`.
+pub(crate) fn rotate_left<T>(v: &mut [T], k: usize) {
+    let n = v.len();
+    if n == 0 {
+        return;
+    }
+    let k = k % n;
+    if let Some(head) = v.get_mut(..k) {
+        head.reverse();
+    }
+    if let Some(tail) = v.get_mut(k..) {
+        tail.reverse();
+    }
+    v.reverse();
+}
+
+/// Copy `src` into the front of `dst`, as far as both reach.
+pub(crate) fn copy_into<T: Copy>(dst: &mut [T], src: &[T]) {
+    for (d, s) in dst.iter_mut().zip(src) {
+        *d = *s;
+    }
+}
+
 /// Move `v[at..]` one place to the right (the last element falls off) and put `x` at
 /// `at`; nothing if `at` is out of range. The sorted-insert step of small lists.
 pub(crate) fn insert_shifting<T: Copy>(v: &mut [T], at: usize, x: T) {
@@ -121,6 +147,21 @@ mod tests {
         let mut back = v.clone();
         back.sort_unstable();
         assert_eq!(back, (0..200).collect::<std::vec::Vec<u32>>());
+    }
+
+    #[test]
+    fn rotate_left_matches_core() {
+        for n in 0..9usize {
+            for k in 0..12usize {
+                let mut v: std::vec::Vec<usize> = (0..n).collect();
+                let mut want = v.clone();
+                if n > 0 {
+                    want.rotate_left(k % n);
+                }
+                rotate_left(&mut v, k);
+                assert_eq!(v, want, "n {n} k {k}");
+            }
+        }
     }
 
     #[test]

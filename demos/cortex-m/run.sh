@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Build the Cortex-M4F firmwares (release) and run one under QEMU mps2-an386 with
-# semihosting. Usage: run.sh [BIN]   BIN: carom-demo-cortex-m (default) or minimal.
+# semihosting. Usage: run.sh [BIN]   BIN: carom-demo-cortex-m (default), minimal or
+# panic_never (the panic-never check: prints nothing, exits 0).
 # Prints what the firmware prints (carom-demo-cortex-m: the golden lines, the restored
 # line, the peak stack; minimal: the ball line and the peak stack) and exits with the
 # firmware's semihosting exit status; fails after TIMEOUT seconds (default 600: the full

@@ -1020,8 +1020,8 @@ impl<'p> Builder<'p> {
         let mut live = [NONE; MAX_WORK_TRIS];
         let mut count = 0;
         for (slot, t) in self.tris.iter().enumerate() {
-            if t.alive {
-                live[count] = slot as u8;
+            if let (true, Some(l)) = (t.alive, live.get_mut(count)) {
+                *l = slot as u8;
                 count += 1;
             }
         }
@@ -1103,7 +1103,9 @@ impl<'p> Builder<'p> {
             self.add_tri(slot as usize, [e.a, e.b, i as u16])?;
             let after = slots.get((k + 1) % count).copied().unwrap_or(NONE);
             let before = slots.get((k + count - 1) % count).copied().unwrap_or(NONE);
-            self.tris[slot as usize].adj = [e.outer, after, before];
+            if let Some(t) = self.tris.get_mut(slot as usize) {
+                t.adj = [e.outer, after, before];
+            }
             let outer = self
                 .tris
                 .get_mut(e.outer as usize)
@@ -1139,18 +1141,18 @@ impl<'p> Builder<'p> {
         // Each triangle is pushed at most once (when it turns visible).
         while len > 0 {
             len -= 1;
-            let adj = self
-                .tris
-                .get(stack[len] as usize)
-                .map_or([NONE; 3], |t| t.adj);
+            let top = stack.get(len).copied().unwrap_or(NONE);
+            let adj = self.tris.get(top as usize).map_or([NONE; 3], |t| t.adj);
             for nb in adj {
                 let Some(t) = self.tris.get_mut(nb as usize) else {
                     continue;
                 };
-                if t.alive && !t.visible && t.height(p) > self.eps && len < MAX_WORK_TRIS {
-                    t.visible = true;
-                    stack[len] = nb;
-                    len += 1;
+                if t.alive && !t.visible && t.height(p) > self.eps {
+                    if let Some(slot) = stack.get_mut(len) {
+                        t.visible = true;
+                        *slot = nb;
+                        len += 1;
+                    }
                 }
             }
         }
@@ -1334,8 +1336,8 @@ impl<'p> Builder<'p> {
             }
             let corners = corners.get_mut(..len).unwrap_or(&mut []);
             // Start at the lowest-index vertex.
-            let first = (0..len).min_by_key(|&j| corners[j]).unwrap_or(0);
-            corners.rotate_left(first);
+            let first = lowest_at(corners.iter().copied());
+            crate::sort::rotate_left(corners, first);
             emit_split(&mut hull, corners, polys.plane(k))?;
         }
 
@@ -1395,14 +1397,17 @@ impl<'p> Builder<'p> {
         let mut live = 0usize;
         for (slot, t) in self.tris.iter().enumerate().filter(|(_, t)| t.alive) {
             let [a, b, c] = t.v.map(|i| self.point(i));
-            area2[slot] = b.sub(a).cross(c.sub(a)).length_squared();
-            order[live] = slot as u8;
-            live += 1;
+            if let (Some(area), Some(o)) = (area2.get_mut(slot), order.get_mut(live)) {
+                *area = b.sub(a).cross(c.sub(a)).length_squared();
+                *o = slot as u8;
+                live += 1;
+            }
         }
         let order = order.get_mut(..live).unwrap_or(&mut []);
-        order.sort_unstable_by(|&x, &y| {
-            let (ax, ay) = (area2[x as usize], area2[y as usize]);
-            ay.total_cmp(&ax).then(x.cmp(&y))
+        // Largest area first, then the lower slot: a strict order on distinct slots.
+        crate::sort::sort_unstable_by(order, |&x, &y| {
+            let area = |i: u8| area2.get(i as usize).copied().unwrap_or(0.0);
+            area(y).total_cmp(&area(x)).then(x.cmp(&y)).is_lt()
         });
 
         let mut group = [NONE; MAX_WORK_TRIS];
@@ -1410,33 +1415,34 @@ impl<'p> Builder<'p> {
         let mut groups = 0u8;
         for &seed in order.iter() {
             let seed = seed as usize;
-            let seed_tri = self.tris[seed];
-            if !seed_tri.alive || group[seed] != NONE {
+            let Some(&seed_tri) = self.tris.get(seed) else {
+                continue;
+            };
+            let Some(seed_group) = group.get_mut(seed).filter(|g| **g == NONE) else {
+                continue;
+            };
+            if !seed_tri.alive {
                 continue;
             }
             let g = groups;
             groups = groups.saturating_add(1);
-            group[seed] = g;
+            *seed_group = g;
             stack[0] = seed as u8;
             let mut len = 1;
             // Each triangle is pushed at most once (when it joins the group).
             while len > 0 {
                 len -= 1;
-                let adj = self
-                    .tris
-                    .get(stack[len] as usize)
-                    .map_or([NONE; 3], |t| t.adj);
+                let top = stack.get(len).copied().unwrap_or(NONE);
+                let adj = self.tris.get(top as usize).map_or([NONE; 3], |t| t.adj);
                 for nb in adj {
                     let Some(t) = self.tri(nb) else {
                         continue;
                     };
-                    let slot = nb as usize;
-                    if group.get(slot) == Some(&NONE)
-                        && self.near_plane(&seed_tri, t)
-                        && len < MAX_WORK_TRIS
-                    {
-                        group[slot] = g;
-                        stack[len] = nb;
+                    let joins = self.near_plane(&seed_tri, t);
+                    let free = group.get_mut(nb as usize).filter(|x| **x == NONE);
+                    if let (true, Some(member), Some(top)) = (joins, free, stack.get_mut(len)) {
+                        *member = g;
+                        *top = nb;
                         len += 1;
                     }
                 }
@@ -1448,9 +1454,9 @@ impl<'p> Builder<'p> {
                     .zip(group.iter())
                     .filter(|(_, &gg)| gg == g)
                 {
-                    let first = (0..3).min_by_key(|&k| t.v[k]).unwrap_or(0);
+                    let first = lowest_at(t.v.iter().copied());
                     let mut v = t.v;
-                    v.rotate_left(first);
+                    crate::sort::rotate_left(&mut v, first);
                     polys.push(&v, self.plane_over(t.n, &v))?;
                 }
             }
@@ -1493,7 +1499,7 @@ impl<'p> Builder<'p> {
             }
         }
         let edges = edges.get(..count).unwrap_or(&[]);
-        let start = (0..count).min_by_key(|&j| edges[j].a).unwrap_or(0);
+        let start = lowest_at(edges.iter().map(|e| e.a));
         let mut ordered = [Edge::default(); MAX_HORIZON];
         let Some(len) = chain_loop(edges, start, &mut ordered) else {
             return Ok(false);
@@ -1682,7 +1688,10 @@ impl Polygons {
             return;
         };
         if let Some(j) = c.iter().position(|&v| v == vertex) {
-            c.copy_within(j + 1.., j);
+            // The removed corner moves to the end, out of the shortened face.
+            if let Some(tail) = c.get_mut(j..) {
+                crate::sort::rotate_left(tail, 1);
+            }
             *len -= 1;
         }
     }
@@ -1746,7 +1755,7 @@ fn emit_split(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result
         let end = (s + MAX_FACE_VERTICES - 2).min(len - 1);
         let src = corners.get(s..=end).unwrap_or(&[]);
         let dst = piece.get_mut(1..1 + src.len()).unwrap_or(&mut []);
-        dst.copy_from_slice(src);
+        crate::sort::copy_into(dst, src);
         emit_face(hull, piece.get(..1 + src.len()).unwrap_or(&[]), plane)?;
         s = end;
     }
@@ -1784,6 +1793,17 @@ fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<
     *hull.face_len.get_mut(f).ok_or(full)? = corners.len() as u8;
     hull.face_count += 1;
     Ok(())
+}
+
+/// Index of the first smallest item (0 when empty).
+fn lowest_at<T: Ord>(items: impl Iterator<Item = T>) -> usize {
+    let mut best: Option<(usize, T)> = None;
+    for (i, x) in items.enumerate() {
+        if best.as_ref().is_none_or(|(_, b)| x < *b) {
+            best = Some((i, x));
+        }
+    }
+    best.map_or(0, |(i, _)| i)
 }
 
 #[cfg(test)]

@@ -149,9 +149,11 @@ impl Face {
         }
     }
 
-    /// The vertices in use.
+    /// The vertices in use: the first `len`, at most [`MAX_FACE_VERTICES`] (a `len` set
+    /// beyond it through the public field reads as a full face).
     pub fn points(&self) -> &[Vec3] {
-        &self.vertices[..self.len as usize]
+        let n = (self.len as usize).min(MAX_FACE_VERTICES);
+        self.vertices.get(..n).unwrap_or(&[])
     }
 
     /// Move the face into another frame in place: `x ↦ r x + t` for its vertices, `r n`
@@ -169,7 +171,8 @@ impl Face {
     pub fn transformed(&self, iso: &Iso) -> Face {
         let mut f = *self;
         f.normal = iso.transform_vector(self.normal);
-        for v in f.vertices[..f.len as usize].iter_mut() {
+        let n = (f.len as usize).min(MAX_FACE_VERTICES);
+        for v in f.vertices.iter_mut().take(n) {
             *v = iso.transform_point(*v);
         }
         f
