@@ -1354,3 +1354,19 @@ fn sizes_out_of_range_and_non_unit_rays_are_refused_exactly() {
         Err(Error::OutOfRange(Input::Density))
     );
 }
+
+/// `Face::len` is a public field: a value beyond the vertex array reads as a full face
+/// instead of panicking, in `points` and in `transformed`.
+#[test]
+fn a_face_length_beyond_its_array_reads_as_full() {
+    use carom::shape::MAX_FACE_VERTICES;
+    let mut f = Shape::cuboid(Vec3::splat(0.5))
+        .unwrap()
+        .supporting_face(Vec3::Y);
+    assert_eq!(f.points().len(), 4);
+    f.len = 200;
+    assert_eq!(f.points().len(), MAX_FACE_VERTICES);
+    let moved = f.transformed(&Iso::new(Vec3::new(1.0, 2.0, 3.0), Quat::IDENTITY));
+    assert_eq!(moved.points().len(), MAX_FACE_VERTICES);
+    assert_eq!(moved.points()[0], f.points()[0] + Vec3::new(1.0, 2.0, 3.0));
+}
