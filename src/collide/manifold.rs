@@ -301,20 +301,9 @@ impl LocalManifold {
     }
 }
 
-/// [`contact`] without input checks (poses finite with unit rotations, margin finite and
-/// `>= 0`). Rotations are renormalised first. Never panics; a manifold that would hold a
-/// non-finite number (only for coordinates near `f32::MAX`) is dropped.
-pub(crate) fn contact_unchecked(
-    a: &Shape,
-    pose_a: &Iso,
-    b: &Shape,
-    pose_b: &Iso,
-    margin: f32,
-) -> Option<Manifold> {
-    contact_cached_unchecked(a, pose_a, b, pose_b, margin, &mut PairCache::default())
-}
-
-/// [`contact_cached`] without input checks (as [`contact_unchecked`]).
+/// [`contact_cached`] without input checks (poses finite with unit rotations, margin
+/// finite and `>= 0`). Never panics; a manifold that would hold a non-finite number (only
+/// for coordinates near `f32::MAX`) is dropped.
 pub(crate) fn contact_cached_unchecked(
     a: &Shape,
     pose_a: &Iso,

@@ -30,7 +30,7 @@ pub use sat::{PairCache, SatAxis, SAT_TOLERANCE};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
 pub(crate) use gjk::distance_in_a;
-pub(crate) use manifold::contact_unchecked;
+pub(crate) use manifold::contact_cached_unchecked;
 pub(crate) use toi::time_of_impact_unchecked;
 
 use crate::error::{Error, Input};

@@ -70,7 +70,7 @@
 
 use heapless::Vec as HVec;
 
-use crate::collide::{contact_unchecked, Manifold};
+use crate::collide::{contact_cached_unchecked, Manifold, PairCache};
 use crate::config::{WorldConfig, REUSE_SLACK};
 use crate::dynamics::body::{Body, Material};
 use crate::dynamics::broad_phase::may_collide;
@@ -130,6 +130,9 @@ pub(crate) struct Contact {
     pub built_margin: f32,
     /// Scratch of one update: a hit event is due (see the module docs).
     pub hit_due: bool,
+    /// The separating axis test's memory of this pair: only ever a shortcut to the same
+    /// answer, so it is derived state (not in snapshots or checksums; fresh after restore).
+    pub sat_cache: PairCache,
 }
 
 impl Contact {
@@ -400,12 +403,13 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         }
     }
     let built_margin = margin + REUSE_SLACK;
-    let manifold = contact_unchecked(
+    let manifold = contact_cached_unchecked(
         &body_a.shape,
         &body_a.pose,
         &body_b.shape,
         &body_b.pose,
         built_margin,
+        &mut c.sat_cache,
     );
     let old_points = c.points;
     let old_len = c.len;

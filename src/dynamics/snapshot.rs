@@ -622,6 +622,7 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
         friction_impulse,
         twist_impulse,
         sticking,
+        sat_cache: crate::collide::PairCache::default(),
     })
 }
 
