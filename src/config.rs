@@ -75,8 +75,10 @@ pub struct WorldConfig {
     /// Default 0.02 m (4 × slop); 0 to 10.
     pub speculative_margin: f32,
     /// Margin (m) by which the broad phase enlarges a moving body's box, so a body that
-    /// moves a little keeps its box and its candidate pairs (no search). Default 0.1 m
-    /// (Box2D's `aabbMargin`); 0 to 10.
+    /// moves a little keeps its box and its candidate pairs (no search). Default 0.05 m
+    /// (half Box2D's 2D `aabbMargin`: in 3D a box has more neighbours within the margin,
+    /// and every such pair holds a contact slot: the `boxes` pile peaks at 8773 pairs with
+    /// 0.1 m, 5228 with 0.05 m, for the same ~1700 touching contacts); 0 to 10.
     pub aabb_margin: f32,
     /// Relative tangential speed (m/s) below which a contact sticks (static friction).
     /// Default 0.01 m/s; 0 to 100.
@@ -120,7 +122,7 @@ impl WorldConfig {
         projection_factor: 0.2,
         max_projection: 0.05,
         speculative_margin: 4.0 * LINEAR_SLOP,
-        aabb_margin: 0.1,
+        aabb_margin: 0.05,
         stick_speed: 0.01,
         sleep_linear_speed: 0.05,
         sleep_angular_speed: 0.05,
