@@ -3,8 +3,8 @@
 //! `b2ContactSolver::SolvePositionConstraints`), weighted by inverse mass and inverse
 //! inertia, for the contacts the soft step left deeper than [`DEEP_SLOPS`] slops, and
 //! bounded **per body**: all corrections of one body in one step add up to at most
-//! `max_projection` (default 0.05 m, the solver's 3 m/s push-out at 60 Hz). It changes
-//! poses, never velocities, so it gives no body speed.
+//! `max_projection` (default 0.01 m: poses moved past friction let piles creep). It
+//! changes poses, never velocities, so it gives no body speed.
 //!
 //! The soft step already pushes overlapping bodies apart at up to `max_push_speed`;
 //! projection matters where that is not enough within a step: a body driven deep by
