@@ -688,3 +688,39 @@ fn finding_any_resealed_special_float_restores_finite() {
         }
     });
 }
+
+/// Finding `fuzz/findings/world/impulse-on-a-body-of-1e-35-kg`: a sphere of density
+/// 1e-38 kg/m³ (mass 4e-38 kg) takes an impulse of 100 N·s 10 m from its centre. The
+/// angular velocity change `I⁻¹ (r × j)` (about 6e40 rad/s) overflows f32, so
+/// `apply_impulse_at` refuses it with `OutOfRange(Force)` as documented, with the world
+/// unchanged; the property function called that refusal a violation because it allowed
+/// an overflow only for huge impulses. It now also allows it when `|j| / m` passes
+/// 1e20 m/s (and still flags a refusal of an ordinary impulse).
+#[test]
+fn finding_an_impulse_may_overflow_a_featherweight_body() {
+    with_stack(|| {
+        let WorldOp::Add(mut feather) = ball(0.0) else {
+            unreachable!()
+        };
+        feather.shape = ShapeSpec::Sphere { radius: 1.0 };
+        feather.mass = carom::MassSpec::Density(1.0e-38);
+        let push = WorldOp::ApplyImpulseAt(
+            HandleRef::Created(0),
+            Vec3::new(0.0, 0.0, 100.0),
+            Vec3::new(0.0, 10.0, 0.0),
+        );
+        let mut w = OpsWorld::new();
+        let h = w
+            .add(BodyDesc::dynamic(sphere(1.0)).density(1.0e-38))
+            .unwrap();
+        let sum = w.checksum();
+        assert_eq!(
+            w.apply_impulse_at(h, Vec3::new(0.0, 0.0, 100.0), Vec3::new(0.0, 10.0, 0.0)),
+            Err(Error::OutOfRange(carom::Input::Force))
+        );
+        assert_eq!(w.checksum(), sum, "a refused impulse changes nothing");
+        assert_eq!(world_ops_properties(&[WorldOp::Add(feather), push]), Ok(()));
+        // The same impulse on a 524 kg ball is applied, and a refusal would be flagged.
+        assert_eq!(world_ops_properties(&[ball(0.0), push]), Ok(()));
+    });
+}

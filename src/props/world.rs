@@ -599,7 +599,13 @@ impl<'h> Run<'h> {
             WorldOp::ApplyImpulseAt(r, j, p) => {
                 let h = self.resolve(r);
                 let good = j.is_finite() && position_ok(p);
-                let huge = j.abs().max_elem() > WORLD_WORKING_RANGE;
+                // The velocity change may overflow f32 when the impulse is huge, or when
+                // the body is so light that `|j| / m` passes 1e20 m/s: with lever arms
+                // up to 2e4 m and shapes of 1 mm or more, below that even the angular
+                // change `|r × j| / I` stays under 1e35.
+                let mass = self.world.body(h).map_or(f32::INFINITY, |b| b.mass());
+                let light = f64::from(j.length()) / f64::from(mass) > 1.0e20;
+                let huge = j.abs().max_elem() > WORLD_WORKING_RANGE || light;
                 self.setter_or_overflow(h, good, huge, |w| w.apply_impulse_at(h, j, p))
             }
             WorldOp::Wake(r) => {
