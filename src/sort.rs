@@ -14,6 +14,13 @@ pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
     sort_unstable_by(v, |a, b| a < b);
 }
 
+/// Sort pairs of `u32` ascending (as tuples compare: first, then second), comparing each
+/// pair as one `u64`.
+pub(crate) fn sort_pairs(v: &mut [(u32, u32)]) {
+    let key = |p: &(u32, u32)| (u64::from(p.0) << 32) | u64::from(p.1);
+    sort_unstable_by(v, |a, b| key(a) < key(b));
+}
+
 /// Sort `v` so that no element is `less` than the one before it. `less` must be a strict
 /// weak order; if it is not, the result is some permutation of `v` (never a panic).
 pub(crate) fn sort_unstable_by<T>(v: &mut [T], less: impl Fn(&T, &T) -> bool) {

@@ -267,7 +267,7 @@ impl<const N: usize> BroadPhase<N> {
         let dropped = kept.dropped;
         // Keys are unique (each unordered pair is offered once), so an unstable sort is
         // deterministic.
-        crate::sort::sort_unstable(pairs);
+        crate::sort::sort_pairs(pairs);
         for (i, b) in bodies.iter_mut() {
             b.moved = retry.get(i).copied().unwrap_or(false);
         }

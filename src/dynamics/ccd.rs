@@ -110,7 +110,7 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
         }
     }
     // Unique entries: an unstable sort is deterministic.
-    crate::sort::sort_unstable(scratch);
+    crate::sort::sort_pairs(scratch);
     let tolerance = scalar::max(cfg.slop, MIN_TOLERANCE);
     // The bodies near an escaped body's path, in slot order.
     let mut near: HVec<u32, N> = HVec::new();

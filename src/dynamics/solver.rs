@@ -208,41 +208,26 @@ fn plan<const N: usize, const C: usize>(
         let _ = scratch.push((key, i as u32));
     }
     // Unique second components: an unstable sort is deterministic.
-    crate::sort::sort_unstable(scratch);
-    for (rank, entry) in scratch.iter_mut().enumerate() {
+    crate::sort::sort_pairs(scratch);
+    // Colour in rank (visit) order.
+    let mut count = [0u32; wide::COLORS + 1];
+    for entry in scratch.iter_mut() {
         let Some(c) = contacts.get(entry.1 as usize) else {
             continue;
         };
         let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
         let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
         let colour = wide::colour(&mut solver.bodies, ia, ib);
-        entry.0 = (colour << 24) | (rank as u32 & 0x00ff_ffff);
-    }
-    crate::sort::sort_unstable(scratch);
-    // Each colour's last partial group goes to the overflow colour (solved lane by lane,
-    // packed four to a group): the store then needs at most one group beyond the
-    // contacts themselves.
-    let mut at = 0usize;
-    while at < scratch.len() {
-        let colour = scratch.get(at).map_or(wide::OVERFLOW, |e| e.0 >> 24);
-        let mut end = at;
-        while scratch.get(end).is_some_and(|e| e.0 >> 24 == colour) {
-            end += 1;
+        entry.0 = colour;
+        if let Some(n) = count.get_mut(colour as usize) {
+            *n += 1;
         }
-        if colour != wide::OVERFLOW {
-            let keep = at + (end - at) / 4 * 4;
-            for e in scratch.get_mut(keep..end).unwrap_or(&mut []) {
-                e.0 = (wide::OVERFLOW << 24) | (e.0 & 0x00ff_ffff);
-            }
-        }
-        at = end.max(at + 1);
     }
-    crate::sort::sort_unstable(scratch);
+    place_in_colour_order(scratch, &count);
     // Groups: a new one every four lanes and at every change of colour.
     let mut groups = 0usize;
     let mut last: Option<(u32, usize)> = None;
-    for &(key, _) in scratch.iter() {
-        let colour = key >> 24;
+    for &(colour, _) in scratch.iter() {
         match last {
             Some((c, lanes)) if c == colour && lanes < 4 => last = Some((c, lanes + 1)),
             _ => {
@@ -260,8 +245,7 @@ fn plan<const N: usize, const C: usize>(
     let mut last: Option<u32> = None;
     let mut k = ContactConstraint::default();
     let softness = contact_solver::Softness::for_contacts(cfg);
-    for &(key, ci) in scratch.iter() {
-        let colour = key >> 24;
+    for &(colour, ci) in scratch.iter() {
         if let Some(c) = last {
             if c != colour || lane == 4 {
                 group += 1;
@@ -285,6 +269,66 @@ fn plan<const N: usize, const C: usize>(
     }
     if last != Some(wide::OVERFLOW) {
         store.overflow_from = store.groups;
+    }
+}
+
+/// Reorder `scratch` (entries `(colour, contact)` in visit order, `count[c]` of colour
+/// `c`) into solve order: colours ascending, visit order within a colour, and each
+/// colour's last partial group of fewer than four moved to the overflow colour (solved
+/// lane by lane, packed four to a group: the store then needs at most one group beyond
+/// the contacts themselves). On return each entry's first component is its final colour.
+///
+/// The order is that of a stable sort by final colour, built without sorting: every
+/// entry's destination is its colour's offset plus its place among the colour's
+/// entries, and a cycle walk moves each entry there once (O(n) swaps).
+fn place_in_colour_order<const C: usize>(
+    scratch: &mut HVec<(u32, u32), C>,
+    count: &[u32; wide::COLORS + 1],
+) {
+    let overflow = wide::OVERFLOW as usize;
+    // Entries that stay in their colour: whole groups of four.
+    let mut keep = [0u32; wide::COLORS + 1];
+    for (k, n) in keep.iter_mut().zip(count.iter()).take(overflow) {
+        *k = *n / 4 * 4;
+    }
+    let mut offset = [0u32; wide::COLORS + 1];
+    let mut at = 0u32;
+    for (o, k) in offset.iter_mut().zip(keep.iter()).take(overflow) {
+        *o = at;
+        at += *k;
+    }
+    if let Some(o) = offset.get_mut(overflow) {
+        *o = at;
+    }
+    // Destinations, packed with the final colour: `colour << 24 | destination`.
+    let mut seen = [0u32; wide::COLORS + 1];
+    for entry in scratch.iter_mut() {
+        let c = (entry.0 as usize).min(overflow);
+        let place = seen.get(c).copied().unwrap_or(0);
+        if let Some(s) = seen.get_mut(c) {
+            *s += 1;
+        }
+        let stays = c != overflow && place < keep.get(c).copied().unwrap_or(0);
+        let colour = if stays { c } else { overflow };
+        let dest = offset.get(colour).copied().unwrap_or(0);
+        if let Some(o) = offset.get_mut(colour) {
+            *o += 1;
+        }
+        entry.0 = ((colour as u32) << 24) | (dest & 0x00ff_ffff);
+    }
+    // Cycle walk: each swap puts one entry at its destination for good.
+    let len = scratch.len();
+    for i in 0..len {
+        for _ in 0..len {
+            let dest = scratch.get(i).map_or(i, |e| (e.0 & 0x00ff_ffff) as usize);
+            if dest == i || dest >= len {
+                break;
+            }
+            scratch.swap(i, dest);
+        }
+    }
+    for entry in scratch.iter_mut() {
+        entry.0 >>= 24;
     }
 }
 
@@ -497,5 +541,42 @@ pub(crate) fn effective_mass(
         1.0 / k
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The counting placement gives the order of the sort it replaces: by final colour
+    /// (each colour's last partial group moved to the overflow colour), then by visit
+    /// order.
+    #[test]
+    fn colour_placement_matches_a_stable_sort() {
+        let mut rng = SplitMix64::new(3);
+        for n in [0usize, 1, 3, 4, 5, 17, 64, 300] {
+            let mut scratch: HVec<(u32, u32), 512> = HVec::new();
+            let mut count = [0u32; wide::COLORS + 1];
+            for i in 0..n {
+                let c = (rng.next_u64() % (wide::COLORS as u64 + 1)) as u32;
+                count[c as usize] += 1;
+                scratch.push((c, 1000 + i as u32)).unwrap();
+            }
+            // The reference: demote the tail of each colour, then a stable sort.
+            let mut want: std::vec::Vec<(u32, u32)> = scratch.iter().copied().collect();
+            let mut seen = [0u32; wide::COLORS + 1];
+            for e in want.iter_mut() {
+                let c = e.0 as usize;
+                let place = seen[c];
+                seen[c] += 1;
+                if c != wide::OVERFLOW as usize && place >= count[c] / 4 * 4 {
+                    e.0 = wide::OVERFLOW;
+                }
+            }
+            want.sort_by_key(|e| e.0);
+            place_in_colour_order(&mut scratch, &count);
+            assert_eq!(scratch.as_slice(), want.as_slice(), "n {n}");
+        }
     }
 }
