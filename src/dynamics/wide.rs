@@ -557,6 +557,43 @@ impl Bodies4 {
         }
     }
 
+    /// [`Bodies4::gather`] of the velocities only (displacement zero, rotation the
+    /// identity): for passes that never read the poses.
+    fn gather_velocities(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
+        let mut v = V4::default();
+        let mut w = V4::default();
+        for (l, i) in idx.iter().enumerate() {
+            if let Some(b) = bodies.get(*i as usize) {
+                v.set(l, b.v);
+                w.set(l, b.w);
+            }
+        }
+        let one = F4::splat(1.0);
+        let zero = F4::ZERO;
+        Bodies4 {
+            v,
+            w,
+            dp: V4::default(),
+            rot: M4 {
+                x: V4 {
+                    x: one,
+                    y: zero,
+                    z: zero,
+                },
+                y: V4 {
+                    x: zero,
+                    y: one,
+                    z: zero,
+                },
+                z: V4 {
+                    x: zero,
+                    y: zero,
+                    z: one,
+                },
+            },
+        }
+    }
+
     fn scatter(&self, bodies: &mut [SolverBody], idx: &[u32; 4], active: [bool; 4]) {
         for (l, (i, on)) in idx.iter().zip(active).enumerate() {
             if !on {
@@ -609,8 +646,8 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
 fn warm_start_group(group: &mut Group<'_>, bodies: &mut [SolverBody], mask: [bool; 4]) {
     let ia = group.s0.idx;
     let ib = group.s1.idx;
-    let mut a = Bodies4::gather(bodies, &ia);
-    let mut b = Bodies4::gather(bodies, &ib);
+    let mut a = Bodies4::gather_velocities(bodies, &ia);
+    let mut b = Bodies4::gather_velocities(bodies, &ib);
     let keep = |x: F4| F4::ZERO.select_where(mask, x);
     let shared = Shared::load(&group.s0.s);
     for j in 0..4 {
@@ -764,14 +801,16 @@ fn solve_group(
         levers += new * p.twist_arm;
         // The speed at impact, for restitution: the closing speed the point had when it
         // first pushed this step (it includes the gravity of the sub-steps before).
-        for l in 0..4 {
-            let first = mask.get(l).copied().unwrap_or(false)
-                && p.total_impulse.lane(l) == 0.0
-                && delta.lane(l) > 0.0;
-            if first && vn.lane(l) < p.normal_speed0.lane(l) {
-                p.normal_speed0.set(l, vn.lane(l));
-            }
+        let mut first = mask;
+        let lanes = p.total_impulse.0.iter().zip(&delta.0);
+        for ((f, (t, d)), (v, s0)) in first
+            .iter_mut()
+            .zip(lanes)
+            .zip(vn.0.iter().zip(&p.normal_speed0.0))
+        {
+            *f = *f && *t == 0.0 && *d > 0.0 && *v < *s0;
         }
+        p.normal_speed0 = p.normal_speed0.select_where(first, vn);
         p.normal_impulse = new;
         p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         p.separation = p.separation.select_where(mask, s);
