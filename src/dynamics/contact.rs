@@ -327,8 +327,13 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let slots = contacts.as_mut_slice();
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
-        if read != write && read < slots.len() && write < slots.len() {
-            slots.swap(read, write);
+        if read != write {
+            // The slot at `read` is not read again: a copy, not a swap.
+            if let Some(&moved) = slots.get(read) {
+                if let Some(dst) = slots.get_mut(write) {
+                    *dst = moved;
+                }
+            }
         }
         let Some(c) = slots.get_mut(write) else {
             break;
