@@ -4,7 +4,7 @@
 //! Every pair runs in A's frame (`b_in_a = pose_a⁻¹ ∘ pose_b`) and answers in the world
 //! frame. Pairs are put in a canonical order first (half-space, sphere, capsule, then the
 //! polytopes: cuboid, hull, triangle); a pair given the other way round is computed
-//! swapped and flipped by [`flipped`].
+//! swapped and flipped by [`flip`].
 //!
 //! - Closed forms ([`super::analytic`]): sphere and capsule pairs, half-space against
 //!   anything, sphere against box.
@@ -571,6 +571,23 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
         let within = d.distance <= margin; // false for NaN too
         if !within {
             return None;
+        }
+        if core.ambiguous {
+            // Apart by less than the rounding of GJK's direction (a vertex or an edge of
+            // `D` at the origin, see `gjk::GJK_DIRECTION_TOLERANCE`): EPA on the touching
+            // cores gives the normal, a face normal of `D`; the separation stays GJK's.
+            let n = epa::touching_normal(&pa, &pb, &core, epa::EpaCaps::DEFAULT);
+            let usable = n
+                .normalize_and_length()
+                .filter(|(n, _)| n.dot(d.normal) > 0.0);
+            if let Some((normal, _)) = usable {
+                return finite_axis(Axis {
+                    normal,
+                    separation: (d.point_b - d.point_a).dot(normal),
+                    point_a: d.point_a,
+                    point_b: d.point_b,
+                });
+            }
         }
         let (normal, _) = d.normal.normalize_and_length()?;
         return finite_axis(Axis {
