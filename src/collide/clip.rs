@@ -551,7 +551,11 @@ mod tests {
             .iter()
             .map(|&i| (pts[i].point_a.x, pts[i].point_a.z))
             .collect();
-        corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        // The crate's panic-free heapsort; the coordinates are finite, `total_cmp` orders
+        // them as `<` does (and would put a NaN last instead of panicking).
+        crate::sort::sort_unstable_by(&mut corners, |a, b| {
+            a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)).is_lt()
+        });
         // Farthest from (0, 2): (4, 0) and (4, 4) tie, the lower index (4, 0) wins; the
         // largest triangle adds (4, 4) (twice-area 16); outside that triangle (0, 0) and
         // (0, 4) both add twice-area 8, the lower index (0, 0) wins.

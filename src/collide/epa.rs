@@ -1056,15 +1056,14 @@ mod tests {
     /// The index of the face on exactly these three vertices.
     fn face_on(poly: &Polytope, v: [u8; 3]) -> usize {
         let mut sorted = v;
-        sorted.sort_unstable();
-        poly.used_faces()
-            .iter()
-            .position(|f| {
-                let mut s = f.v;
-                s.sort_unstable();
-                s == sorted
-            })
-            .unwrap()
+        crate::sort::sort_unstable(&mut sorted);
+        let found = poly.used_faces().iter().position(|f| {
+            let mut s = f.v;
+            crate::sort::sort_unstable(&mut s);
+            s == sorted
+        });
+        assert!(found.is_some(), "no face on {v:?}");
+        found.unwrap_or(0)
     }
 
     #[test]

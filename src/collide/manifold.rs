@@ -113,7 +113,7 @@ pub struct Manifold {
 impl Manifold {
     /// The points in use.
     pub fn points(&self) -> &[ManifoldPoint] {
-        &self.points[..(self.len as usize).min(MAX_MANIFOLD_POINTS)]
+        self.points.get(..self.len as usize).unwrap_or(&self.points)
     }
 
     /// The smallest separation over the points (m); `+∞` for an empty manifold.
