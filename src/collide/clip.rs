@@ -278,6 +278,17 @@ impl ClipBuffers {
     }
 }
 
+/// The index after `k` in a cycle of `n` (0 after the last): `(k + 1) % n` without the
+/// division, which has a panic path for `n = 0`.
+#[inline]
+fn next_index(k: usize, n: usize) -> usize {
+    if k + 1 < n {
+        k + 1
+    } else {
+        0
+    }
+}
+
 /// The feature of `face` (a polygon, segment or point in the caller's frame) nearest to
 /// `p`: the face itself when `p` projects inside it by more than a tolerance, else the
 /// nearest boundary edge, or a vertex when the nearest boundary point is within the
@@ -289,7 +300,7 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
     let mut longest = 0.0;
     for k in 0..n {
         let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
-        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        let v1 = verts.get(next_index(k, n)).copied().unwrap_or(v0);
         longest = scalar::max(longest, (v1 - v0).length());
     }
     let tolerance = FEATURE_TOLERANCE * longest;
@@ -320,7 +331,7 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
     let mut best_d2 = f32::INFINITY;
     for k in 0..edges {
         let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
-        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        let v1 = verts.get(next_index(k, n)).copied().unwrap_or(v0);
         let e = v1 - v0;
         let e2 = e.length_squared();
         let t = if e2 > 0.0 {
@@ -336,7 +347,10 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
             best = if along <= tolerance {
                 face.vertex_ids.get(k).copied().unwrap_or(face.id)
             } else if back <= tolerance {
-                face.vertex_ids.get((k + 1) % n).copied().unwrap_or(face.id)
+                face.vertex_ids
+                    .get(next_index(k, n))
+                    .copied()
+                    .unwrap_or(face.id)
             } else {
                 face.edge_ids.get(k).copied().unwrap_or(face.id)
             };
