@@ -5,6 +5,8 @@
 //!
 //! - [`distance`] (GJK): distance, closest points, separating normal.
 //! - [`penetration`] (EPA): depth and normal of overlapping shapes.
+//! - [`separation`]: both in one: the signed separation (distance apart, minus the depth
+//!   overlapping), the normal and the witness points, whichever the case.
 //! - [`contact`]: a contact manifold of up to 4 points with feature ids; [`contact_cached`]
 //!   the same with a per-pair [`PairCache`] (box and hull pairs by the separating axis
 //!   test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
@@ -17,6 +19,7 @@ mod epa;
 mod gjk;
 mod manifold;
 mod sat;
+mod separation;
 mod toi;
 
 pub use analytic::segment_closest_points;
@@ -27,6 +30,7 @@ pub use manifold::{
     MAX_MANIFOLD_POINTS,
 };
 pub use sat::{PairCache, SatAxis, SAT_TOLERANCE};
+pub use separation::{separation, Separation, SeparationStatus};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
 pub(crate) use gjk::distance_in_a;
