@@ -41,7 +41,7 @@ use core::cmp::Ordering;
 pub const MAX_MANIFOLD_POINTS: usize = 4;
 
 /// Tolerance of the general path's face choice, relative to the pair's scale
-/// `|t|∞ + r_A + r_B` (`t` B's position in A's frame, `r` the bounding radii), the same
+/// `|t| + r_A + r_B` (`t` B's position in A's frame, `r` the bounding radii), the same
 /// relative tolerance as the separating axis test's ([`SAT_TOLERANCE`]): about 3e-5 m for
 /// 1 m shapes.
 ///
@@ -731,8 +731,7 @@ fn round_feature(shape: &Shape, shape_in_a: &Iso, p: Vec3, outward: Vec3) -> Fea
 
 /// The face choice's tolerance for a pair (see [`GENERAL_FACE_TOLERANCE`]).
 fn face_tolerance(a: &Shape, b: &Shape, b_in_a: &Iso) -> f32 {
-    GENERAL_FACE_TOLERANCE
-        * (b_in_a.position.abs().max_elem() + a.bounding_radius() + b.bounding_radius())
+    GENERAL_FACE_TOLERANCE * (b_in_a.position.length() + a.bounding_radius() + b.bounding_radius())
 }
 
 /// The separation of two shapes along a face's normal: `n · p − n · f₀` with `n` the

@@ -86,7 +86,7 @@ use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES,
 /// [`super::contact`]): one shape's best face must separate more than the other's (within
 /// it a tie rule independent of the argument order decides), and the best edge pair more
 /// than the chosen face, by `SAT_TOLERANCE · scale` (m) to be chosen, with
-/// `scale = |t|∞ + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
+/// `scale = |t| + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
 /// largest core coordinate; for a hull, its build tolerance over
 /// [`crate::shape::ConvexHull::TOLERANCE`]). For 1 m shapes about 3e-5 m: a hundred times the
 /// rounding of a separation (about 1e-7 of the scale), so resting contacts keep their
@@ -774,7 +774,9 @@ fn cached_separates<A: Polytope, B: Polytope>(
 /// The tolerance of the axis choice for a pair (see [`SAT_TOLERANCE`]).
 #[inline]
 fn tolerance(fr: &Frame, extent_a: f32, extent_b: f32) -> f32 {
-    SAT_TOLERANCE * (fr.t.abs().max_elem() + extent_a + extent_b)
+    // `|t|`, not a component of `t`: the length is the same in either shape's frame (up
+    // to rounding), so both argument orders use the same tolerance.
+    SAT_TOLERANCE * (fr.t.length() + extent_a + extent_b)
 }
 
 /// Two polytopes (B at `b_in_a`): the separating axis test with the cached axis first,
