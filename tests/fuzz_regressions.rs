@@ -853,3 +853,55 @@ fn toi_tolerance_below_gjk_resolution() {
         1.0e-5 * size
     );
 }
+
+/// Root cause: the separating axis test took an edge pair's separation from the two edges'
+/// points, `n · (p_B − p_A)`, which is the separation only when the edges are the shapes'
+/// supporting features along `±n`; the Gauss-map test decides that from the faces'
+/// normals. Hull B has a quad face merged from nearly coplanar triangles that meets its
+/// neighbour along a 0.24 mm edge not running along the cross product of the two faces'
+/// normals, so the test passed a pair whose points were not the supports and read the
+/// hulls 4 mm apart (more than the 3.9 mm margin) while they overlap by 39 mm: `contact`
+/// said `None`. The old GJK hid it by calling the pair apart too; the exact-touching GJK
+/// (and the brute-force oracle) see the overlap. Fix: a pair that would end the test or
+/// become the best edge axis is measured again with both shapes' support points
+/// (`collide::sat::support_separation`), which is exact for any axis.
+#[test]
+fn sat_edge_of_a_merged_face() {
+    // crash-ae15fa4c (narrow_phase, this branch's 2-minute run).
+    let a = hull(&[
+        v(0x9f9f9f9f, 0x089f9f9f, 0x9f9f9f9f),
+        v(0x407cfc00, 0xc07cfc00, 0x3f3fbdc0),
+        v(0x407cfc00, 0x407cfc00, 0x407cfc00),
+        v(0x407cfc00, 0x407cfc00, 0x3d9f8000),
+        v(0x0102fffe, 0x3d808000, 0x407cfc00),
+        v(0x407cfc00, 0x407cfc00, 0x82828282),
+    ]);
+    let b = hull(&[
+        v(0x9f9f9f9f, 0x9f959f9f, 0x9f9f9f9f),
+        v(0x9f9f9f9f, 0x9f9f9f9f, 0x3f3f3f9f),
+        v(0x407cfc00, 0x407cfc00, 0x407cf800),
+        v(0x3d9f8000, 0xbd808000, 0x3d808000),
+        v(0x407cfc00, 0x407cfc00, 0x407cfc00),
+        v(0xc0fafc00, 0x827c8282, 0x82828282),
+    ]);
+    let (a, b) = (Shape::hull(&a), Shape::hull(&b));
+    let pa = pose(v(0x82828282, 0x82828282, 0x00138282), [0, 0, 0, 0x3f800000]);
+    let pb = Iso::new(
+        v(0x82828282, 0x00000000, 0x407cfc00),
+        Quat::from_xyzw(14896.0, 16187.0, 16191.0, 16191.0).normalize(),
+    );
+    let margin = f(0x3b808000);
+    assert_cases(&[("ae15fa4c", a, pa, b, pb, margin)]);
+    // The root cause itself: both orders find the 39 mm overlap.
+    let depth = penetration(&a, &pa, &b, &pb)
+        .unwrap()
+        .expect("overlap")
+        .depth;
+    for m in [
+        carom::collide::contact(&a, &pa, &b, &pb, margin).unwrap(),
+        carom::collide::contact(&b, &pb, &a, &pa, margin).unwrap(),
+    ] {
+        let m = m.expect("the hulls overlap");
+        assert!((m.min_separation() + depth).abs() < 1e-4, "{m:?} {depth}");
+    }
+}
