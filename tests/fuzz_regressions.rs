@@ -11,8 +11,8 @@ use carom::collide::{distance, penetration, time_of_impact, GjkStatus, Motion, S
 use carom::error::MAX_COORDINATE;
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
-    distance_properties, manifold_properties, penetration_properties, shape_size_in_range,
-    toi_properties, Violation,
+    brute_force_distance, core_vertices, distance_properties, manifold_properties,
+    penetration_properties, shape_size_in_range, toi_properties, Violation,
 };
 use carom::shape::{Capsule, ConvexHull, Cuboid, Shape};
 use carom::{Error, Input};
@@ -904,4 +904,40 @@ fn sat_edge_of_a_merged_face() {
         let m = m.expect("the hulls overlap");
         assert!((m.min_separation() + depth).abs() < 1e-4, "{m:?} {depth}");
     }
+}
+
+/// Root cause: the brute-force oracle of `distance_properties` certifies "apart" with a
+/// separating axis among the closest pair's vector, the normals of vertex triples and the
+/// cross products of vertex pairs. For a sphere (one core point) against a triangle the
+/// Minkowski difference is flat, and its sides (normal to the triangle's edges, in its
+/// plane) are none of those. Here the sphere's centre lies on the line of an edge, 3 cm past
+/// its end and exactly level (in x) with the triangle's far corner: the closest pair's
+/// vector, along −x, shows a gap of exactly 0 in f32, no other candidate separates, and
+/// the oracle called the shapes overlapping while GJK (rightly) found them 1.5 cm apart.
+/// Fix (`props`): for a set of at most 3 points, the flat difference's side normals are
+/// candidates too.
+#[test]
+fn oracle_misses_the_sides_of_a_flat_difference() {
+    // crash-d5744f6c (narrow_phase, this branch's second run; fails on the old code too).
+    let ball = Shape::sphere(f(0x3c7a0000)).unwrap();
+    let ball_at = Iso::new(
+        v(0x40f8f800, 0, 0),
+        Quat::from_xyzw(31832.0, 380.0, 245.0, 293.0).normalize(),
+    );
+    let triangle = Shape::triangle(
+        v(0x40f8f800, 0x40f8f800, 0x40f8f800),
+        v(0x40f80000, 0, 0),
+        v(0, 0, 0),
+    )
+    .unwrap();
+    let identity = pose(v(0, 0, 0), [0, 0, 0, 0x3f800000]);
+    assert_cases(&[("d5744f6c", ball, ball_at, triangle, identity, 0.0)]);
+    // The oracle itself: apart by the distance to the near corner (7.75 m), minus the radius.
+    let va = core_vertices(&ball, &ball_at).unwrap();
+    let vb = core_vertices(&triangle, &identity).unwrap();
+    let o = brute_force_distance(va.points(), vb.points()).unwrap();
+    assert!(
+        (o.distance - (f(0x40f8f800) - f(0x40f80000))).abs() < 1e-6,
+        "{o:?}"
+    );
 }

@@ -541,7 +541,8 @@ fn gap_along(u: Vec3, a: &[Vec3], b: &[Vec3]) -> f32 {
 /// Brute-force separating-axis test for two vertex sets: the normals of every vertex
 /// triple of each set (a superset of the face normals) and the cross products of every
 /// vertex pair of one with every vertex pair of the other (a superset of the edge
-/// pairs), both signs.
+/// pairs), both signs; and, when a set has at most 3 points, the in-plane side normals of
+/// a flat Minkowski difference.
 fn separating_axis_exists(a: &[Vec3], b: &[Vec3]) -> bool {
     let separates = |u: Vec3| gap_along(u, a, b) > 0.0 || gap_along(-u, a, b) > 0.0;
     for set in [a, b] {
@@ -560,6 +561,48 @@ fn separating_axis_exists(a: &[Vec3], b: &[Vec3]) -> bool {
             for (j, &p2) in b.iter().enumerate() {
                 for &q2 in b.iter().skip(j + 1) {
                     if separates((q1 - p1).cross(q2 - p2)) {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    // A set of at most 3 points (a sphere's centre, a capsule's segment, a triangle) can
+    // make the Minkowski difference flat, and a flat difference has faces the candidates
+    // above miss: its sides, normal to its edges within its plane. Those are the small
+    // set's plane normal crossed with its own edges, and an edge-pair normal crossed with
+    // either edge. (Found by the narrow_phase fuzzer: a sphere centred level with a
+    // triangle's far corner, 3 cm past another corner, read as overlapping.)
+    let edges = |set: &[Vec3]| {
+        let mut out = [Vec3::ZERO; 3];
+        let mut n = 0;
+        for (i, &p) in set.iter().enumerate().take(3) {
+            for &q in set.iter().take(3).skip(i + 1) {
+                if let Some(slot) = out.get_mut(n) {
+                    *slot = q - p;
+                    n += 1;
+                }
+            }
+        }
+        (out, n)
+    };
+    for (small, other) in [(a, b), (b, a)] {
+        if small.len() > 3 {
+            continue;
+        }
+        let (own, count) = edges(small);
+        let own = own.get(..count).unwrap_or(&[]);
+        if let [e1, e2, ..] = own {
+            let m = e1.cross(*e2);
+            if own.iter().any(|e| separates(m.cross(*e))) {
+                return true;
+            }
+        }
+        for e in own {
+            for (j, &p) in other.iter().enumerate() {
+                for &q in other.iter().skip(j + 1) {
+                    let u = e.cross(q - p);
+                    if separates(u.cross(*e)) || separates(u.cross(q - p)) {
                         return true;
                     }
                 }
