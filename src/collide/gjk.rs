@@ -838,7 +838,10 @@ fn touches_origin(v: Vec3, count: usize, size2: f32) -> bool {
 /// extends past it, so the cores overlap and EPA gives the depth. False for NaN.
 #[inline]
 fn beyond_origin(v: Vec3, w: Vec3) -> bool {
-    v.dot(w) < -GJK_OVERLAP_TOLERANCE * v.length() * w.length()
+    // Squared, without the two square roots: `v·w < 0` and `(v·w)² > tol² |v|² |w|²`.
+    let vw = v.dot(w);
+    let tol2 = GJK_OVERLAP_TOLERANCE * GJK_OVERLAP_TOLERANCE;
+    vw < 0.0 && vw * vw > tol2 * v.length_squared() * w.length_squared()
 }
 
 /// True when a closest point `v` on a simplex of `count` points has no trustworthy
@@ -883,20 +886,23 @@ pub(crate) fn gjk_cores(
         // The stops below end on "apart" unless `w` shows `D` reaching clearly past the
         // origin along `−v` (see `beyond_origin`): then the origin lies within rounding of
         // the simplex with `D` on both sides of it, and the cores overlap.
-        let apart = if beyond_origin(v, w.w) {
-            GjkStatus::Overlapping
-        } else {
-            GjkStatus::Separated
+        let v_now = v;
+        let apart = || {
+            if beyond_origin(v_now, w.w) {
+                GjkStatus::Overlapping
+            } else {
+                GjkStatus::Separated
+            }
         };
         // 1: the lower bound v·w/|v| is within the tolerance of the upper bound |v|.
         let gap = vv - v.dot(w.w);
         if gap <= GJK_RELATIVE_TOLERANCE * scalar::sqrt(vv) * w.w.length() {
-            status = apart;
+            status = apart();
             break;
         }
         // 2: nothing new on the boundary.
         if simplex.contains(&w) {
-            status = apart;
+            status = apart();
             break;
         }
         let mut grown = simplex;
@@ -917,14 +923,14 @@ pub(crate) fn gjk_cores(
             let rounding = GJK_ROUNDING * scalar::sqrt(vv * grown.max_w_squared());
             let progress = kept && vv_next <= vv + rounding;
             if !progress {
-                status = apart;
+                status = apart();
                 break;
             }
             plateau = if vv_next < vv { 0 } else { plateau + 1 };
             if plateau > GJK_MAX_PLATEAU {
                 simplex = next;
                 v = v_next;
-                status = apart;
+                status = apart();
                 break;
             }
         }

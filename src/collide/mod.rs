@@ -80,46 +80,50 @@ impl Placement {
     /// entry and `Rᵀ (p_b − p_a)` a few ulps of `|p_b − p_a|`, so B's vertices land up to
     /// 1.2e-6 m off in A's frame for shapes 1.5 m apart (measured over 20 000 random
     /// poses): more than the touching gaps [`distance`] must resolve (1e-6 m, see
-    /// `tests/touching.rs`). In f64 the matrix `R_aᵀ R_b` and the translation are exact to
-    /// f64 rounding, and rounding them to f32 leaves half an ulp per entry. Only `+ − × ÷`
+    /// `tests/touching.rs`). In f64 the relative rotation `qa* qb`, its matrix and the
+    /// translation `R_aᵀ (p_b − p_a)` are exact to f64 rounding, and rounding them to f32
+    /// leaves half an ulp per entry. About 100 f64 operations per query. Only `+ − × ÷`
     /// (IEEE, the same bits on every target); the rotations need not be unit: the matrix
     /// of `q` is built with `s = 2 / |q|²`, which is a rotation for any `q ≠ 0`.
     pub fn between(pose_a: &Iso, pose_b: &Iso) -> Placement {
-        let ra = matrix_f64(pose_a.rotation);
-        let rb = matrix_f64(pose_b.rotation);
+        let ra = matrix_f64(quat_f64(pose_a.rotation));
         let d = [
             f64::from(pose_b.position.x) - f64::from(pose_a.position.x),
             f64::from(pose_b.position.y) - f64::from(pose_a.position.y),
             f64::from(pose_b.position.z) - f64::from(pose_a.position.z),
         ];
         let t = transpose_mul_f64(&ra, d);
-        let [c0, c1, c2] = rb.map(|col| to_f32(transpose_mul_f64(&ra, col)));
-        let (qa, qb) = (pose_a.rotation, pose_b.rotation);
-        let q = |v: f32| f64::from(v);
-        let (ax, ay, az, aw) = (-q(qa.x), -q(qa.y), -q(qa.z), q(qa.w));
-        let (bx, by, bz, bw) = (q(qb.x), q(qb.y), q(qb.z), q(qb.w));
-        let relative = Quat::from_xyzw(
-            (aw * bx + ax * bw + ay * bz - az * by) as f32,
-            (aw * by - ax * bz + ay * bw + az * bx) as f32,
-            (aw * bz + ax * by - ay * bx + az * bw) as f32,
-            (aw * bw - ax * bx - ay * by - az * bz) as f32,
-        )
-        .normalize();
+        // The relative rotation `qa* qb` (products of f32s are exact in f64).
+        let [ax, ay, az, aw] = quat_f64(pose_a.rotation);
+        let [bx, by, bz, bw] = quat_f64(pose_b.rotation);
+        let (ax, ay, az) = (-ax, -ay, -az);
+        let q = [
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz,
+        ];
+        let [c0, c1, c2] = matrix_f64(q).map(to_f32);
+        let relative = Quat::from_xyzw(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
         Placement {
-            iso: Iso::new(to_f32(t), relative),
+            iso: Iso::new(to_f32(t), relative.normalize()),
             rotation: Mat3::from_cols(c0, c1, c2),
         }
     }
 }
 
-/// The rotation matrix of `q` (any `q ≠ 0`) in f64, as three columns.
-fn matrix_f64(q: Quat) -> [[f64; 3]; 3] {
-    let (x, y, z, w) = (
+/// `q`'s components `(x, y, z, w)` in f64.
+fn quat_f64(q: Quat) -> [f64; 4] {
+    [
         f64::from(q.x),
         f64::from(q.y),
         f64::from(q.z),
         f64::from(q.w),
-    );
+    ]
+}
+
+/// The rotation matrix of `q = (x, y, z, w)` (any `q ≠ 0`) in f64, as three columns.
+fn matrix_f64([x, y, z, w]: [f64; 4]) -> [[f64; 3]; 3] {
     let n = x * x + y * y + z * z + w * w;
     let s = if n > 0.0 { 2.0 / n } else { 0.0 };
     [
