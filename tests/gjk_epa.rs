@@ -16,6 +16,7 @@ use carom::collide::{
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
     brute_force_distance, core_vertices, distance_properties, penetration_properties,
+    separation_properties,
 };
 use carom::rng::SplitMix64;
 use carom::shape::{ConvexHull, Shape};
@@ -494,6 +495,11 @@ fn properties_hold_for_every_shape_pair_under_random_poses() {
                 );
                 assert_eq!(
                     penetration_properties(a, &pa, b, &pb),
+                    Ok(()),
+                    "{a:?} {pa:?} {b:?} {pb:?}"
+                );
+                assert_eq!(
+                    separation_properties(a, &pa, b, &pb),
                     Ok(()),
                     "{a:?} {pa:?} {b:?} {pb:?}"
                 );

@@ -8,7 +8,9 @@ use carom::collide::{
     PairCache, SatAxis, SimplexCache, SAT_TOLERANCE,
 };
 use carom::math::{Iso, Quat, Vec3};
-use carom::props::{distance_properties, manifold_properties, penetration_properties};
+use carom::props::{
+    distance_properties, manifold_properties, penetration_properties, separation_properties,
+};
 use carom::rng::SplitMix64;
 use carom::scenes::queries::{
     self, PoseQuery, QuerySet, BALL_RADIUS, BOX_HALF, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
@@ -426,6 +428,11 @@ fn narrow_phase_properties_hold_on_the_query_sets() {
         assert_eq!(distance_properties(&a, pa, &b, pb), Ok(()), "{name} {q:?}");
         assert_eq!(
             penetration_properties(&a, pa, &b, pb),
+            Ok(()),
+            "{name} {q:?}"
+        );
+        assert_eq!(
+            separation_properties(&a, pa, &b, pb),
             Ok(()),
             "{name} {q:?}"
         );

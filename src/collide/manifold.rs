@@ -410,12 +410,14 @@ fn relative(pose_a: &Iso, unit_a: crate::math::Quat, pose_b: &Iso) -> (Iso, Iso)
 }
 
 /// The general path ([`general`]) of a pair in canonical rank order, world frame in and
-/// out. Two polytopes (same rank) are computed in a canonical order of their own, the
-/// one [`polytope_order`] puts first as A, and flipped back when that is B: GJK, EPA and
-/// the face choice then see the same pair the same way whichever order the caller gave,
-/// so `contact(B, A)` is `contact(A, B)` with the normal negated and the sides swapped,
-/// to the bit. (Each order run in its own frame disagreed by rounding, and by whole faces
-/// where two faces or EPA axes tie within the tolerances.)
+/// out. Two shapes of the same rank (two polytopes, two capsules, two spheres) are
+/// computed in a canonical order of their own, the one [`pair_order`] puts first as A,
+/// and flipped back when that is B: GJK, EPA, the closed forms and the face choice then
+/// see the same pair the same way whichever order the caller gave, so `contact(B, A)` is
+/// `contact(A, B)` with the normal negated and the sides swapped, to the bit. (Each order
+/// run in its own frame disagreed by rounding, by whole faces where two faces or EPA axes
+/// tie within the tolerances, and for two nearly coaxial capsules by the ill-conditioned
+/// normal of their segments' closest points: fuzz finding `bd34b9f7`.)
 fn general_in_canonical_order(
     a: &Shape,
     pose_a: &Iso,
@@ -424,8 +426,8 @@ fn general_in_canonical_order(
     margin: f32,
     out: &mut Manifold,
 ) -> bool {
-    let both_polytopes = order_rank(a) == 3 && order_rank(b) == 3;
-    if both_polytopes && polytope_order(b, pose_b, a, pose_a) == Ordering::Less {
+    let same_rank = order_rank(a) == order_rank(b);
+    if same_rank && pair_order(b, pose_b, a, pose_a) == Ordering::Less {
         let found = general_in_world(b, pose_b, a, pose_a, margin, out);
         if found {
             flip(out);
@@ -459,16 +461,20 @@ fn general_in_world(
     }
 }
 
-/// A total order of polytope shapes with their poses that does not depend on which is
-/// called A: by kind (cuboid, hull, triangle), then by their geometry (half-extents,
-/// hull vertices, triangle vertices, by `total_cmp`), then by their world poses (position,
-/// then rotation). Equal only for the same geometry at the same pose, where both orders of
-/// the pair are the same query.
-fn polytope_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
+/// A total order of two shapes of the same rank with their poses that does not depend on
+/// which is called A: by kind (cuboid, hull, triangle; sphere; capsule), then by their
+/// geometry (half-extents, hull vertices, triangle vertices, radius, half-height and
+/// radius, by `total_cmp`), then by their world poses (position, then rotation). Equal
+/// only for the same geometry at the same pose, where both orders of the pair are the same
+/// query.
+fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
     let kind = |s: &Shape| match s {
         Shape::Cuboid(_) => 0u8,
         Shape::Hull(_) => 1,
-        _ => 2,
+        Shape::Triangle(_) => 2,
+        Shape::Sphere(_) => 3,
+        Shape::Capsule(_) => 4,
+        Shape::HalfSpace(_) => 5,
     };
     let vec = |u: Vec3, v: Vec3| {
         u.x.total_cmp(&v.x)
@@ -486,6 +492,11 @@ fn polytope_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering 
         o
     };
     let geometry = match (a, b) {
+        (Shape::Sphere(x), Shape::Sphere(y)) => x.radius.total_cmp(&y.radius),
+        (Shape::Capsule(x), Shape::Capsule(y)) => x
+            .half_height
+            .total_cmp(&y.half_height)
+            .then(x.radius.total_cmp(&y.radius)),
         (Shape::Cuboid(x), Shape::Cuboid(y)) => vec(x.half_extents, y.half_extents),
         (Shape::Hull(x), Shape::Hull(y)) => points(x.vertices(), y.vertices()),
         (Shape::Triangle(x), Shape::Triangle(y)) => points(&x.vertices, &y.vertices),

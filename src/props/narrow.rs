@@ -4,8 +4,8 @@
 
 use super::{check, Violation};
 use crate::collide::{
-    distance, penetration, segment_closest_points, EpaStatus, Penetration, SimplexCache,
-    MAX_GJK_ITERATIONS,
+    distance, penetration, segment_closest_points, separation, EpaStatus, Penetration,
+    SeparationStatus, SimplexCache, MAX_GJK_ITERATIONS,
 };
 use crate::error::MAX_COORDINATE;
 use crate::math::{scalar, Iso, Vec3};
@@ -318,6 +318,77 @@ pub fn penetration_properties(
         )?;
     }
     Ok(())
+}
+
+/// Properties of [`separation`] for `a` at `pose_a` and `b` at `pose_b`:
+///
+/// - it never panics and refuses exactly the invalid poses ([`accepted_pose`]);
+/// - the output is finite with a unit normal; two half-spaces give
+///   [`SeparationStatus::HalfSpaces`] at 0;
+/// - it is the other queries' answer to the bit: `distance` (with a fresh cache) and its
+///   points when that is `> 0`, else minus the depth of `penetration` with its normal and
+///   points (0 when `penetration` finds none);
+/// - in the [`WORKING_RANGE`] with shape sizes in range: `separation(b, a)` is the same
+///   separation within `SLACK · scale`.
+pub fn separation_properties(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+) -> Result<(), Violation> {
+    let valid = accepted_pose(pose_a) && accepted_pose(pose_b);
+    if separation(a, pose_a, b, pose_b).is_err() {
+        return check(!valid, "separation: valid pose refused");
+    }
+    check(valid, "separation: invalid pose accepted")?;
+    let (pose_a, pose_b) = (&unit(pose_a), &unit(pose_b));
+    let s = separation(a, pose_a, b, pose_b)
+        .map_err(|_| Violation("separation: normalised pose refused"))?;
+    check(
+        s.separation.is_finite()
+            && s.normal.is_finite()
+            && s.point_a.is_finite()
+            && s.point_b.is_finite(),
+        "separation: non-finite output",
+    )?;
+    check(is_unit(s.normal), "separation: normal not unit length")?;
+    if matches!((a, b), (Shape::HalfSpace(_), Shape::HalfSpace(_))) {
+        return check(
+            s.status == SeparationStatus::HalfSpaces && s.separation == 0.0,
+            "separation: two half-spaces not reported as such",
+        );
+    }
+    let d = distance(a, pose_a, b, pose_b, &mut SimplexCache::default())
+        .map_err(|_| Violation("separation: GJK refused the poses"))?;
+    if d.distance > 0.0 {
+        check(
+            s.separation == d.distance && s.point_a == d.point_a && s.point_b == d.point_b,
+            "separation: differs from distance",
+        )?;
+    } else {
+        let p = penetration(a, pose_a, b, pose_b)
+            .map_err(|_| Violation("separation: EPA refused the poses"))?;
+        match p {
+            Some(p) => check(
+                s.separation == 0.0 - p.depth
+                    && s.normal == p.normal
+                    && s.point_a == p.point_a
+                    && s.point_b == p.point_b,
+                "separation: differs from minus the penetration depth",
+            )?,
+            None => check(s.separation == 0.0, "separation: touching but not 0")?,
+        }
+    }
+    let scale = query_scale(a, pose_a, b, pose_b);
+    if !in_working_range(a, b, scale) {
+        return Ok(());
+    }
+    let w = separation(b, pose_b, a, pose_a)
+        .map_err(|_| Violation("separation: swapped query refused"))?;
+    check(
+        scalar::abs(w.separation - s.separation) <= SLACK * scale,
+        "separation: separation(b, a) differs from separation(a, b)",
+    )
 }
 
 /// True when the geometric properties apply: the scene scale is at most
