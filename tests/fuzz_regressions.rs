@@ -11,8 +11,8 @@ use carom::collide::{distance, penetration, time_of_impact, GjkStatus, Motion, S
 use carom::error::MAX_COORDINATE;
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
-    distance_properties, manifold_properties, penetration_properties, shape_size_in_range,
-    toi_properties, Violation,
+    brute_force_distance, core_vertices, distance_properties, manifold_properties,
+    penetration_properties, separation_properties, shape_size_in_range, toi_properties, Violation,
 };
 use carom::shape::{Capsule, ConvexHull, Cuboid, Shape};
 use carom::{Error, Input};
@@ -33,10 +33,11 @@ fn hull(points: &[Vec3]) -> ConvexHull {
     ConvexHull::new(points).expect("the finding's point cloud builds a hull")
 }
 
-/// The three properties in the order the `narrow_phase` target checks them.
+/// The four properties in the order the `narrow_phase` target checks them.
 fn narrow_phase(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso, margin: f32) -> Result<(), Violation> {
     distance_properties(a, pa, b, pb)?;
     penetration_properties(a, pa, b, pb)?;
+    separation_properties(a, pa, b, pb)?;
     manifold_properties(a, pa, b, pb, margin)
 }
 
@@ -852,4 +853,121 @@ fn toi_tolerance_below_gjk_resolution() {
         d.distance,
         1.0e-5 * size
     );
+}
+
+/// Root cause: the separating axis test took an edge pair's separation from the two edges'
+/// points, `n · (p_B − p_A)`, which is the separation only when the edges are the shapes'
+/// supporting features along `±n`; the Gauss-map test decides that from the faces'
+/// normals. Hull B has a quad face merged from nearly coplanar triangles that meets its
+/// neighbour along a 0.24 mm edge not running along the cross product of the two faces'
+/// normals, so the test passed a pair whose points were not the supports and read the
+/// hulls 4 mm apart (more than the 3.9 mm margin) while they overlap by 39 mm: `contact`
+/// said `None`. The old GJK hid it by calling the pair apart too; the exact-touching GJK
+/// (and the brute-force oracle) see the overlap. Fix: a pair that would end the test or
+/// become the best edge axis is measured again with both shapes' support points
+/// (`collide::sat::support_separation`), which is exact for any axis.
+#[test]
+fn sat_edge_of_a_merged_face() {
+    // crash-ae15fa4c (narrow_phase, this branch's 2-minute run).
+    let a = hull(&[
+        v(0x9f9f9f9f, 0x089f9f9f, 0x9f9f9f9f),
+        v(0x407cfc00, 0xc07cfc00, 0x3f3fbdc0),
+        v(0x407cfc00, 0x407cfc00, 0x407cfc00),
+        v(0x407cfc00, 0x407cfc00, 0x3d9f8000),
+        v(0x0102fffe, 0x3d808000, 0x407cfc00),
+        v(0x407cfc00, 0x407cfc00, 0x82828282),
+    ]);
+    let b = hull(&[
+        v(0x9f9f9f9f, 0x9f959f9f, 0x9f9f9f9f),
+        v(0x9f9f9f9f, 0x9f9f9f9f, 0x3f3f3f9f),
+        v(0x407cfc00, 0x407cfc00, 0x407cf800),
+        v(0x3d9f8000, 0xbd808000, 0x3d808000),
+        v(0x407cfc00, 0x407cfc00, 0x407cfc00),
+        v(0xc0fafc00, 0x827c8282, 0x82828282),
+    ]);
+    let (a, b) = (Shape::hull(&a), Shape::hull(&b));
+    let pa = pose(v(0x82828282, 0x82828282, 0x00138282), [0, 0, 0, 0x3f800000]);
+    let pb = Iso::new(
+        v(0x82828282, 0x00000000, 0x407cfc00),
+        Quat::from_xyzw(14896.0, 16187.0, 16191.0, 16191.0).normalize(),
+    );
+    let margin = f(0x3b808000);
+    assert_cases(&[("ae15fa4c", a, pa, b, pb, margin)]);
+    // The root cause itself: both orders find the 39 mm overlap.
+    let depth = penetration(&a, &pa, &b, &pb)
+        .unwrap()
+        .expect("overlap")
+        .depth;
+    for m in [
+        carom::collide::contact(&a, &pa, &b, &pb, margin).unwrap(),
+        carom::collide::contact(&b, &pb, &a, &pa, margin).unwrap(),
+    ] {
+        let m = m.expect("the hulls overlap");
+        assert!((m.min_separation() + depth).abs() < 1e-4, "{m:?} {depth}");
+    }
+}
+
+/// Root cause: the brute-force oracle of `distance_properties` certifies "apart" with a
+/// separating axis among the closest pair's vector, the normals of vertex triples and the
+/// cross products of vertex pairs. For a sphere (one core point) against a triangle the
+/// Minkowski difference is flat, and its sides (normal to the triangle's edges, in its
+/// plane) are none of those. Here the sphere's centre lies on the line of an edge, 3 cm past
+/// its end and exactly level (in x) with the triangle's far corner: the closest pair's
+/// vector, along −x, shows a gap of exactly 0 in f32, no other candidate separates, and
+/// the oracle called the shapes overlapping while GJK (rightly) found them 1.5 cm apart.
+/// Fix (`props`): for a set of at most 3 points, the flat difference's side normals are
+/// candidates too.
+#[test]
+fn oracle_misses_the_sides_of_a_flat_difference() {
+    // crash-d5744f6c (narrow_phase, this branch's second run; fails on the old code too).
+    let ball = Shape::sphere(f(0x3c7a0000)).unwrap();
+    let ball_at = Iso::new(
+        v(0x40f8f800, 0, 0),
+        Quat::from_xyzw(31832.0, 380.0, 245.0, 293.0).normalize(),
+    );
+    let triangle = Shape::triangle(
+        v(0x40f8f800, 0x40f8f800, 0x40f8f800),
+        v(0x40f80000, 0, 0),
+        v(0, 0, 0),
+    )
+    .unwrap();
+    let identity = pose(v(0, 0, 0), [0, 0, 0, 0x3f800000]);
+    assert_cases(&[("d5744f6c", ball, ball_at, triangle, identity, 0.0)]);
+    // The oracle itself: apart by the distance to the near corner (7.75 m), minus the radius.
+    let va = core_vertices(&ball, &ball_at).unwrap();
+    let vb = core_vertices(&triangle, &identity).unwrap();
+    let o = brute_force_distance(va.points(), vb.points()).unwrap();
+    assert!(
+        (o.distance - (f(0x40f8f800) - f(0x40f80000))).abs() < 1e-6,
+        "{o:?}"
+    );
+}
+
+/// Root cause: two capsules of one rank were computed in whichever order the caller gave,
+/// each in its own frame. For two nearly coaxial capsules (one turned half a turn about
+/// an axis 3e-5 rad off x, 3 cm apart, deep inside each other) the normal comes from the
+/// segments' closest points, which for nearly parallel segments is ill-conditioned: the
+/// two orders' rounding gave normals that were not reversed. Fix: pairs of one rank on
+/// the general path run in a canonical order (`manifold::pair_order`) and are flipped
+/// back, so `contact(b, a)` is `contact(a, b)` reversed, to the bit.
+#[test]
+fn same_rank_pairs_run_in_one_order() {
+    // crash-bd34b9f7 (narrow_phase, CI's fixed seed once the target checked separation;
+    // fails on the old code too).
+    let a = Shape::capsule(f(0x4078fa00), f(0x4078fa00)).unwrap();
+    let pa = Iso::new(
+        v(0, 0, 0x3cf80000),
+        Quat::from_xyzw(31868.0, 1.0, 0.0, 0.0).normalize(),
+    );
+    let b = Shape::capsule(f(0x4078fa00), f(0x40ff7d00)).unwrap();
+    let pb = pose(v(0, 0, 0), [0, 0, 0, 0x3f800000]);
+    assert_cases(&[("bd34b9f7", a, pa, b, pb, 0.0)]);
+    let m = carom::collide::contact(&a, &pa, &b, &pb, 0.0)
+        .unwrap()
+        .unwrap();
+    let w = carom::collide::contact(&b, &pb, &a, &pa, 0.0)
+        .unwrap()
+        .unwrap();
+    assert_eq!(m.normal, -w.normal);
+    assert_eq!(m.min_separation(), w.min_separation());
 }

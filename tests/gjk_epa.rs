@@ -10,12 +10,13 @@
 //! 0.1 m).
 
 use carom::collide::{
-    distance, intersects, penetration, segment_closest_points, EpaStatus, GjkStatus, SimplexCache,
-    MAX_GJK_ITERATIONS,
+    distance, intersects, penetration, segment_closest_points, separation, EpaStatus, GjkStatus,
+    Separation, SeparationStatus, SimplexCache, MAX_GJK_ITERATIONS,
 };
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
     brute_force_distance, core_vertices, distance_properties, penetration_properties,
+    separation_properties,
 };
 use carom::rng::SplitMix64;
 use carom::shape::{ConvexHull, Shape};
@@ -494,6 +495,11 @@ fn properties_hold_for_every_shape_pair_under_random_poses() {
                 );
                 assert_eq!(
                     penetration_properties(a, &pa, b, &pb),
+                    Ok(()),
+                    "{a:?} {pa:?} {b:?} {pb:?}"
+                );
+                assert_eq!(
+                    separation_properties(a, &pa, b, &pb),
                     Ok(()),
                     "{a:?} {pa:?} {b:?} {pb:?}"
                 );
@@ -1036,4 +1042,233 @@ fn epa_depth_of_concentric_and_nearly_concentric_pairs_matches_the_oracle() {
          capsule/box {:.1e}",
         worst[0], worst[1], worst[2], worst[3]
     );
+}
+
+// ---------------------------------------------------------------------------------------
+// The one-shot query: `separation`.
+// ---------------------------------------------------------------------------------------
+
+fn fresh_separation(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> Separation {
+    separation(a, pa, b, pb).expect("valid poses")
+}
+
+/// Every pair kind under random poses, apart and overlapping: `separation` gives the
+/// numbers of `distance` (apart) and `penetration` (overlapping) to the bit, a unit normal,
+/// and witnesses with `point_b − point_a = separation · normal`; swapping A and B gives the
+/// same separation, the negated normal and swapped witnesses.
+#[test]
+fn separation_is_distance_or_minus_depth_and_swaps_with_a_negated_normal() {
+    let hulls = random_hulls(23, 2, 0.7).expect("hulls build");
+    let shapes = [
+        Shape::sphere(0.4).unwrap(),
+        Shape::capsule(0.5, 0.2).unwrap(),
+        Shape::cuboid(Vec3::new(0.6, 0.3, 0.45)).unwrap(),
+        Shape::hull(&hulls[0]),
+        Shape::hull(&hulls[1]),
+        Shape::triangle(
+            Vec3::new(-0.5, 0.0, -0.4),
+            Vec3::new(0.6, 0.1, 0.0),
+            Vec3::new(0.0, -0.1, 0.7),
+        )
+        .unwrap(),
+        Shape::half_space(Vec3::new(0.1, 1.0, 0.0)).unwrap(),
+    ];
+    let mut rng = SplitMix64::new(24);
+    let (mut apart, mut overlapping, mut worst_swap) = (0, 0, 0.0f32);
+    for round in 0..60 {
+        for (i, a) in shapes.iter().enumerate() {
+            for (j, b) in shapes.iter().enumerate() {
+                let reach = if round % 2 == 0 { 0.8 } else { 2.0 };
+                let (pa, pb) = (random_pose(&mut rng, reach), random_pose(&mut rng, reach));
+                let s = fresh_separation(a, &pa, b, &pb);
+                let ctx = || format!("{a:?} {pa:?} {b:?} {pb:?} {s:?}");
+                assert!((s.normal.length() - 1.0).abs() < 1e-5, "{}", ctx());
+                let both_planes = i == 6 && j == 6;
+                if both_planes {
+                    assert_eq!(s.status, SeparationStatus::HalfSpaces);
+                    assert_eq!(s.separation, 0.0);
+                    continue;
+                }
+                let d = fresh_distance(a, &pa, b, &pb);
+                if d.distance > 0.0 {
+                    apart += 1;
+                    assert_eq!(s.separation, d.distance, "{}", ctx());
+                    assert_eq!((s.point_a, s.point_b), (d.point_a, d.point_b), "{}", ctx());
+                    if s.separation > TOL {
+                        assert_eq!(s.normal, d.normal, "{}", ctx());
+                    }
+                } else {
+                    let p = penetration(a, &pa, b, &pb)
+                        .unwrap()
+                        .expect("GJK says touching");
+                    overlapping += 1;
+                    assert_eq!(s.separation, 0.0 - p.depth, "{}", ctx());
+                    assert_eq!(s.normal, p.normal, "{}", ctx());
+                    assert_eq!((s.point_a, s.point_b), (p.point_a, p.point_b), "{}", ctx());
+                }
+                if s.status == SeparationStatus::Converged {
+                    let along = s.point_b - s.point_a - s.normal * s.separation;
+                    assert!(along.length() < 2.0 * TOL, "{}", ctx());
+                }
+                let w = fresh_separation(b, &pb, a, &pa);
+                assert!((w.separation - s.separation).abs() < TOL, "{} {w:?}", ctx());
+                // A well-defined normal (not touching cores, where it is a fallback) is
+                // negated by the swap.
+                let round_core_touch = (s.separation + a.radius() + b.radius()).abs() < TOL;
+                if !round_core_touch && s.separation.abs() > TOL {
+                    let off = (w.normal + s.normal).length();
+                    worst_swap = worst_swap.max(off);
+                    assert!(off < NORMAL_TOL, "{} {w:?}", ctx());
+                    assert!(
+                        (w.point_a - s.point_b).length() < 10.0 * TOL,
+                        "{} {w:?}",
+                        ctx()
+                    );
+                    assert!(
+                        (w.point_b - s.point_a).length() < 10.0 * TOL,
+                        "{} {w:?}",
+                        ctx()
+                    );
+                }
+            }
+        }
+    }
+    eprintln!("{apart} apart, {overlapping} overlapping, worst swapped normal {worst_swap:e}");
+    assert!(apart > 500 && overlapping > 500, "{apart} {overlapping}");
+}
+
+/// Spheres: the separation is `|c_b − c_a| − r_a − r_b` along the line of centres, apart
+/// and overlapping; axis-aligned boxes (and boxes sharing one rotation): the exact f64
+/// separation of two boxes, `−min_i (h_i − |Δ_i|)` along that axis when they overlap and
+/// `|max(|Δ| − h, 0)|` when apart.
+#[test]
+fn separation_of_spheres_and_boxes_is_analytic() {
+    let mut rng = SplitMix64::new(31);
+    for _ in 0..2000 {
+        let (ra, rb) = (rng.range(0.1, 1.0), rng.range(0.1, 1.0));
+        let ca = rng.unit_vector() * rng.range(0.0, 3.0);
+        let cb = ca + rng.unit_vector() * rng.range(0.05, 2.5);
+        let (pa, pb) = (Iso::new(ca, rng.rotation()), Iso::new(cb, rng.rotation()));
+        let s = fresh_separation(
+            &Shape::sphere(ra).unwrap(),
+            &pa,
+            &Shape::sphere(rb).unwrap(),
+            &pb,
+        );
+        let d = v64(cb)
+            .iter()
+            .zip(v64(ca).iter())
+            .map(|(x, y)| (x - y) * (x - y))
+            .sum::<f64>()
+            .sqrt();
+        let expected = d - ra as f64 - rb as f64;
+        assert!(
+            (s.separation as f64 - expected).abs() < 1e-5,
+            "{s:?} {expected}"
+        );
+        let n = (cb - ca).normalize_or(Vec3::Y);
+        assert!((s.normal - n).length() < 1e-5, "{s:?} {n:?}");
+        assert!((s.point_a - (ca + n * ra)).length() < 1e-5, "{s:?}");
+        assert!((s.point_b - (cb - n * rb)).length() < 1e-5, "{s:?}");
+    }
+    let (mut apart, mut overlapping) = (0, 0);
+    for k in 0..2000 {
+        let ha = Vec3::new(
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+        );
+        let hb = Vec3::new(
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+            rng.range(0.1, 1.0),
+        );
+        let shared = if k % 2 == 0 {
+            Quat::IDENTITY
+        } else {
+            rng.rotation()
+        };
+        let ca = rng.unit_vector() * rng.range(0.0, 2.0);
+        let delta_local = Vec3::new(
+            rng.range(-1.6, 1.6),
+            rng.range(-1.6, 1.6),
+            rng.range(-1.6, 1.6),
+        );
+        let pa = Iso::new(ca, shared);
+        let pb = Iso::new(ca + shared.rotate(delta_local), shared);
+        let s = fresh_separation(
+            &Shape::cuboid(ha).unwrap(),
+            &pa,
+            &Shape::cuboid(hb).unwrap(),
+            &pb,
+        );
+        // The exact answer in the shared frame, from the f32 poses (f64).
+        let dl = pa.inverse_transform_point(pb.position);
+        let dl = v64(dl);
+        let h = [0usize, 1, 2].map(|i| v64(ha)[i] + v64(hb)[i]);
+        let gaps = [0usize, 1, 2].map(|i| dl[i].abs() - h[i]);
+        let (expected, axis) = if gaps.iter().all(|g| *g < 0.0) {
+            overlapping += 1;
+            let (i, g) = gaps
+                .iter()
+                .enumerate()
+                .max_by(|x, y| x.1.total_cmp(y.1))
+                .unwrap();
+            (*g, Some(i))
+        } else {
+            apart += 1;
+            (
+                gaps.iter().map(|g| g.max(0.0).powi(2)).sum::<f64>().sqrt(),
+                None,
+            )
+        };
+        let ctx = || format!("{ha:?} {hb:?} {pa:?} {pb:?} {s:?} expected {expected}");
+        // 1e-5 of a few metres: EPA's tolerance (overlap), GJK's rounding (apart).
+        assert!((s.separation as f64 - expected).abs() < 3e-5, "{}", ctx());
+        if let Some(i) = axis {
+            // The second-deepest axis must be clearly worse for the normal to be unique.
+            let mut sorted = gaps;
+            sorted.sort_by(|x, y| y.total_cmp(x));
+            if sorted[0] - sorted[1] > 1e-3 {
+                let mut n = [0.0f32; 3];
+                n[i] = dl[i].signum() as f32;
+                let n = shared.rotate(Vec3::new(n[0], n[1], n[2]));
+                assert!((s.normal - n).length() < NORMAL_TOL, "{}", ctx());
+            }
+        }
+    }
+    assert!(apart > 300 && overlapping > 300, "{apart} {overlapping}");
+}
+
+#[test]
+fn separation_refuses_exactly_what_the_other_queries_refuse() {
+    let s = Shape::sphere(1.0).unwrap();
+    let bad = [
+        (
+            Iso::from_position(Vec3::new(f32::NAN, 0.0, 0.0)),
+            carom::Error::NonFinite(carom::Input::Position),
+        ),
+        (
+            Iso::from_position(Vec3::new(0.0, f32::INFINITY, 0.0)),
+            carom::Error::NonFinite(carom::Input::Position),
+        ),
+        (
+            Iso::from_position(Vec3::new(0.0, 0.0, 2.0 * carom::MAX_COORDINATE)),
+            carom::Error::OutOfRange(carom::Input::Position),
+        ),
+        (
+            Iso::new(Vec3::ZERO, Quat::from_xyzw(0.0, 0.0, 0.0, 2.0)),
+            carom::Error::NotUnit(carom::Input::Rotation),
+        ),
+        (
+            Iso::new(Vec3::ZERO, Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0)),
+            carom::Error::NonFinite(carom::Input::Rotation),
+        ),
+    ];
+    for (p, e) in bad {
+        assert_eq!(separation(&s, &p, &s, &Iso::IDENTITY), Err(e), "{p:?}");
+        assert_eq!(separation(&s, &Iso::IDENTITY, &s, &p), Err(e), "{p:?}");
+        let d = distance(&s, &p, &s, &Iso::IDENTITY, &mut SimplexCache::default());
+        assert_eq!(d.map(|_| ()), Err(e), "{p:?}");
+    }
 }

@@ -70,15 +70,22 @@ fn sphere_sphere_matches_the_centre_line() {
     assert!(hits > 200, "too few contacts to mean anything: {hits}");
 }
 
+/// Concentric spheres have no contact direction of their own: the pair runs in its
+/// canonical order (the smaller sphere first) and pushes along world +Y from there, so the
+/// larger sphere is pushed up whichever order the caller gives, and `contact(b, a)` is
+/// `contact(a, b)` reversed.
 #[test]
-fn concentric_spheres_push_along_world_up() {
-    let a = Shape::sphere(1.0).unwrap();
-    let b = Shape::sphere(0.5).unwrap();
+fn concentric_spheres_push_the_larger_along_world_up() {
+    let big = Shape::sphere(1.0).unwrap();
+    let small = Shape::sphere(0.5).unwrap();
     let rot = Quat::from_axis_angle(Vec3::new(1.0, 2.0, 3.0), 0.7);
     let pose = Iso::new(Vec3::new(1.0, 2.0, 3.0), rot);
-    let m = contact_of(&a, &pose, &b, &pose, 0.0).unwrap();
+    let m = contact_of(&small, &pose, &big, &pose, 0.0).unwrap();
     assert!(close(m.normal, Vec3::Y, EXACT));
     assert!((m.points[0].separation + 1.5).abs() < EXACT);
+    let w = contact_of(&big, &pose, &small, &pose, 0.0).unwrap();
+    assert_eq!(w.normal, -m.normal);
+    assert_eq!(w.points[0].separation, m.points[0].separation);
 }
 
 /// Closest point of the box `|x| <= h` to `p` (box frame).
@@ -737,4 +744,367 @@ fn epa_depth_of_concentric_cubes() {
         // Depth 1 m along X or Y (both are 1 m deep to within 0.5·(1 − cos 0.01)).
         assert!((m.min_separation() + 1.0).abs() < ITERATIVE, "{m:?}");
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Honest, symmetric manifolds on the benchmark query sets.
+// ---------------------------------------------------------------------------------------
+
+mod honest {
+    use carom::collide::{contact, contact_gjk_epa, penetration, Manifold};
+    use carom::Error;
+
+    type Query = fn(&Shape, &Iso, &Shape, &Iso, f32) -> Result<Option<Manifold>, Error>;
+    use carom::math::{Iso, Quat, Vec3};
+    use carom::scenes::queries::{
+        self, PoseQuery, QuerySet, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
+    };
+    use carom::shape::{ConvexHull, Shape};
+
+    /// The deepest point's separation against the minimal penetration depth (m).
+    pub const DEPTH: f64 = 1.0e-4;
+    /// `|normal(B, A) + normal(A, B)|` and the depth difference of the two orders.
+    pub const SYMMETRY: f32 = 1.0e-4;
+
+    type V = [f64; 3];
+    fn v64(v: Vec3) -> V {
+        [v.x as f64, v.y as f64, v.z as f64]
+    }
+    fn sub(a: V, b: V) -> V {
+        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+    }
+    fn dot(a: V, b: V) -> f64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+    fn cross(a: V, b: V) -> V {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+    fn unit(a: V) -> Option<V> {
+        let l = dot(a, a).sqrt();
+        (l > 1e-9).then(|| [a[0] / l, a[1] / l, a[2] / l])
+    }
+    /// `q` (normalised in f64) applied to `v`, plus `p`.
+    fn place(pose: &Iso, v: V) -> V {
+        let q = pose.rotation;
+        let n = ((q.x as f64).powi(2)
+            + (q.y as f64).powi(2)
+            + (q.z as f64).powi(2)
+            + (q.w as f64).powi(2))
+        .sqrt();
+        let u = [q.x as f64 / n, q.y as f64 / n, q.z as f64 / n];
+        let w = q.w as f64 / n;
+        let t = cross(u, v).map(|x| 2.0 * x);
+        let ut = cross(u, t);
+        let p = v64(pose.position);
+        [
+            v[0] + w * t[0] + ut[0] + p[0],
+            v[1] + w * t[1] + ut[1] + p[1],
+            v[2] + w * t[2] + ut[2] + p[2],
+        ]
+    }
+
+    /// Local vertices, faces (vertex loops) and edges (vertex pairs).
+    type Outline = (Vec<V>, Vec<Vec<usize>>, Vec<(usize, usize)>);
+
+    /// A polytope in the world frame (f64): vertices, face normals, edge directions.
+    struct Poly {
+        vertices: Vec<V>,
+        faces: Vec<V>,
+        edges: Vec<V>,
+    }
+
+    /// The world-frame polytope of a cuboid, hull or triangle; `None` for round shapes.
+    fn poly(s: &Shape, pose: &Iso) -> Option<Poly> {
+        let (local, faces, edges): Outline = match s {
+            Shape::Cuboid(c) => {
+                let h = v64(c.half_extents);
+                let vs: Vec<V> = (0..8)
+                    .map(|i| {
+                        let sg = |bit: usize, x: f64| if i & bit != 0 { x } else { -x };
+                        [sg(1, h[0]), sg(2, h[1]), sg(4, h[2])]
+                    })
+                    .collect();
+                // Faces by one corner triple each; edges along the axes.
+                let faces = vec![
+                    vec![0, 2, 4],
+                    vec![1, 3, 5],
+                    vec![0, 1, 4],
+                    vec![2, 3, 6],
+                    vec![0, 1, 2],
+                    vec![4, 5, 6],
+                ];
+                (vs, faces, vec![(0, 1), (0, 2), (0, 4)])
+            }
+            Shape::Hull(h) => {
+                let vs: Vec<V> = h.vertices().iter().map(|&p| v64(p)).collect();
+                let mut faces = Vec::new();
+                let mut edges = Vec::new();
+                for f in 0..h.face_count() {
+                    let idx: Vec<usize> = h.face_vertices(f).iter().map(|&i| i as usize).collect();
+                    for k in 0..idx.len() {
+                        edges.push((idx[k], idx[(k + 1) % idx.len()]));
+                    }
+                    faces.push(idx);
+                }
+                (vs, faces, edges)
+            }
+            Shape::Triangle(t) => {
+                let vs: Vec<V> = t.vertices.iter().map(|&p| v64(p)).collect();
+                (vs, vec![vec![0, 1, 2]], vec![(0, 1), (1, 2), (2, 0)])
+            }
+            _ => return None,
+        };
+        let vertices: Vec<V> = local.iter().map(|&v| place(pose, v)).collect();
+        let faces = faces
+            .iter()
+            .filter_map(|f| {
+                // Newell's normal of the face polygon.
+                let mut n = [0.0; 3];
+                for k in 0..f.len() {
+                    let (p, q) = (vertices[f[k]], vertices[f[(k + 1) % f.len()]]);
+                    n[0] += (p[1] - q[1]) * (p[2] + q[2]);
+                    n[1] += (p[2] - q[2]) * (p[0] + q[0]);
+                    n[2] += (p[0] - q[0]) * (p[1] + q[1]);
+                }
+                unit(n)
+            })
+            .collect();
+        let edges = edges
+            .iter()
+            .filter_map(|&(i, j)| unit(sub(vertices[j], vertices[i])))
+            .collect();
+        Some(Poly {
+            vertices,
+            faces,
+            edges,
+        })
+    }
+
+    /// The minimal penetration depth of two convex polytopes (f64 SAT over every face
+    /// normal of both and every edge pair), or `None` when a separating axis exists.
+    fn sat_depth(a: &Poly, b: &Poly) -> Option<f64> {
+        let span = |p: &Poly, u: V| {
+            p.vertices
+                .iter()
+                .map(|v| dot(*v, u))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                    (lo.min(x), hi.max(x))
+                })
+        };
+        let mut axes: Vec<V> = a.faces.iter().chain(b.faces.iter()).copied().collect();
+        for ea in &a.edges {
+            for eb in &b.edges {
+                if let Some(u) = unit(cross(*ea, *eb)) {
+                    axes.push(u);
+                }
+            }
+        }
+        let mut depth = f64::INFINITY;
+        for u in axes {
+            let (la, ha) = span(a, u);
+            let (lb, hb) = span(b, u);
+            let overlap = (ha - lb).min(hb - la);
+            if overlap < 0.0 {
+                return None;
+            }
+            depth = depth.min(overlap);
+        }
+        Some(depth)
+    }
+
+    /// The minimal penetration depth of `a` and `b` (f64 SAT for two polytopes, EPA
+    /// otherwise), or `None` when they are apart.
+    fn true_depth(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> Option<f64> {
+        match (poly(a, pa), poly(b, pb)) {
+            (Some(x), Some(y)) => sat_depth(&x, &y),
+            _ => penetration(a, pa, b, pb)
+                .unwrap()
+                .map(|p| p.depth as f64)
+                .filter(|d| *d > 0.0),
+        }
+    }
+
+    /// Statistics of one pair kind.
+    #[derive(Default, Debug)]
+    pub struct Stats {
+        pub overlapping: usize,
+        pub depth_off: usize,
+        pub worst_depth: f64,
+        pub asymmetric: usize,
+        pub worst_normal: f32,
+        pub worst_depth_swap: f32,
+        pub worst: String,
+    }
+
+    fn hulls() -> Vec<ConvexHull> {
+        let mut clouds = vec![[Vec3::ZERO; HULL_POINTS]; HULLS];
+        queries::hull_clouds(&mut clouds);
+        clouds.iter().map(|c| ConvexHull::new(c).unwrap()).collect()
+    }
+
+    fn poses(set: QuerySet) -> Vec<PoseQuery> {
+        let mut qs = vec![PoseQuery::default(); PAIRS];
+        set.fill(&mut qs);
+        qs
+    }
+
+    fn measure(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso, s: &mut Stats) {
+        measure_with(contact, a, pa, b, pb, s);
+    }
+
+    fn measure_with(query: Query, a: &Shape, pa: &Iso, b: &Shape, pb: &Iso, s: &mut Stats) {
+        let Some(depth) = true_depth(a, pa, b, pb) else {
+            return;
+        };
+        s.overlapping += 1;
+        let m: Option<Manifold> = query(a, pa, b, pb, CONTACT_MARGIN).unwrap();
+        let w: Option<Manifold> = query(b, pb, a, pa, CONTACT_MARGIN).unwrap();
+        let (Some(m), Some(w)) = (m, w) else {
+            s.depth_off += 1;
+            s.worst = format!("no manifold at depth {depth}: {a:?} {pa:?} {b:?} {pb:?}");
+            return;
+        };
+        let err = (m.min_separation() as f64 + depth).abs();
+        if err > DEPTH {
+            s.depth_off += 1;
+        }
+        if err > s.worst_depth {
+            s.worst_depth = err;
+            s.worst = format!(
+                "depth {} vs {depth}: {a:?} {pa:?} {b:?} {pb:?}",
+                -m.min_separation()
+            );
+        }
+        let off = (m.normal + w.normal).length();
+        let swap = (m.min_separation() - w.min_separation()).abs();
+        if off > SYMMETRY || swap > SYMMETRY {
+            s.asymmetric += 1;
+        }
+        s.worst_normal = s.worst_normal.max(off);
+        s.worst_depth_swap = s.worst_depth_swap.max(swap);
+    }
+
+    /// Every pair kind on the benchmark poses: (name, stats).
+    pub fn run() -> Vec<(&'static str, Stats)> {
+        let hulls = hulls();
+        let hull = |i: u8| Shape::hull(&hulls[usize::from(i) % hulls.len()]);
+        let cube = Shape::cuboid(Vec3::splat(queries::BOX_HALF)).unwrap();
+        let ball = Shape::sphere(queries::BALL_RADIUS).unwrap();
+        let capsule = Shape::capsule(0.4, 0.3).unwrap();
+        let triangle = Shape::triangle(
+            Vec3::new(-0.9, 0.0, -0.6),
+            Vec3::new(0.9, 0.1, -0.5),
+            Vec3::new(0.1, -0.1, 0.9),
+        )
+        .unwrap();
+        let hull_poses = poses(QuerySet::HullHull);
+        let box_poses = poses(QuerySet::BoxBox);
+        let ball_poses = poses(QuerySet::BallBox);
+        let mut out = Vec::new();
+        let mut kind = |name: &'static str, f: &mut dyn FnMut(&mut Stats)| {
+            let mut s = Stats::default();
+            f(&mut s);
+            out.push((name, s));
+        };
+        kind("hull-hull", &mut |s| {
+            for q in &hull_poses {
+                measure(&hull(q.hull_a), &q.pose_a, &hull(q.hull_b), &q.pose_b, s);
+            }
+        });
+        kind("box-box", &mut |s| {
+            for q in &box_poses {
+                measure(&cube, &q.pose_a, &cube, &q.pose_b, s);
+            }
+        });
+        kind("box-hull", &mut |s| {
+            for q in &hull_poses {
+                measure(&cube, &q.pose_a, &hull(q.hull_b), &q.pose_b, s);
+            }
+        });
+        kind("hull-hull, general path", &mut |s| {
+            for q in &hull_poses {
+                let (a, b) = (hull(q.hull_a), hull(q.hull_b));
+                measure_with(contact_gjk_epa, &a, &q.pose_a, &b, &q.pose_b, s);
+            }
+        });
+        kind("box-box, general path", &mut |s| {
+            for q in &box_poses {
+                measure_with(contact_gjk_epa, &cube, &q.pose_a, &cube, &q.pose_b, s);
+            }
+        });
+        kind("box-hull, general path", &mut |s| {
+            for q in &hull_poses {
+                let b = hull(q.hull_b);
+                measure_with(contact_gjk_epa, &cube, &q.pose_a, &b, &q.pose_b, s);
+            }
+        });
+        kind("sphere-hull", &mut |s| {
+            for q in &ball_poses {
+                measure(&ball, &q.pose_a, &hull(q.hull_b), &q.pose_b, s);
+            }
+        });
+        kind("capsule-hull", &mut |s| {
+            for q in &hull_poses {
+                measure(&capsule, &q.pose_a, &hull(q.hull_b), &q.pose_b, s);
+            }
+        });
+        kind("capsule-capsule", &mut |s| {
+            for q in &box_poses {
+                measure(&capsule, &q.pose_a, &capsule, &q.pose_b, s);
+            }
+        });
+        kind("triangle-hull", &mut |s| {
+            for q in &hull_poses {
+                measure(&triangle, &q.pose_a, &hull(q.hull_b), &q.pose_b, s);
+            }
+        });
+        kind("triangle-box", &mut |s| {
+            for q in &box_poses {
+                measure(&triangle, &q.pose_a, &cube, &q.pose_b, s);
+            }
+        });
+        kind("triangle-triangle", &mut |s| {
+            for q in &box_poses {
+                let turned = Iso::new(q.pose_b.position * 0.6, q.pose_b.rotation);
+                measure(&triangle, &q.pose_a, &triangle, &turned, s);
+            }
+        });
+        kind("sphere-triangle", &mut |s| {
+            for q in &ball_poses {
+                let near = Iso::new(q.pose_b.position * 0.5, Quat::IDENTITY);
+                measure(&triangle, &q.pose_a, &ball, &near, s);
+            }
+        });
+        kind("capsule-triangle", &mut |s| {
+            for q in &box_poses {
+                let near = Iso::new(q.pose_b.position * 0.5, q.pose_b.rotation);
+                measure(&triangle, &q.pose_a, &capsule, &near, s);
+            }
+        });
+        out
+    }
+}
+
+/// On the benchmark poses, for every overlapping pair of every kind that goes through
+/// the separating axis test or the general GJK/EPA path: the manifold's deepest point
+/// agrees with the minimal penetration depth (f64 SAT for polytope pairs, EPA otherwise)
+/// within [`honest::DEPTH`], and `contact(B, A)` has the negated normal and the same
+/// depth within [`honest::SYMMETRY`].
+#[test]
+fn manifolds_are_honest_and_symmetric_on_the_query_sets() {
+    let mut failures = Vec::new();
+    for (name, s) in honest::run() {
+        eprintln!(
+            "{name}: {} overlapping, depth off > 1e-4: {} (worst {:.2e} m), asymmetric: {} (normal {:.2e}, depth {:.2e})",
+            s.overlapping, s.depth_off, s.worst_depth, s.asymmetric, s.worst_normal, s.worst_depth_swap
+        );
+        if s.depth_off > 0 || s.asymmetric > 0 {
+            failures.push(format!("{name}: {s:?}"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
 }

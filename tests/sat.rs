@@ -8,7 +8,9 @@ use carom::collide::{
     PairCache, SatAxis, SimplexCache, SAT_TOLERANCE,
 };
 use carom::math::{Iso, Quat, Vec3};
-use carom::props::{distance_properties, manifold_properties, penetration_properties};
+use carom::props::{
+    distance_properties, manifold_properties, penetration_properties, separation_properties,
+};
 use carom::rng::SplitMix64;
 use carom::scenes::queries::{
     self, PoseQuery, QuerySet, BALL_RADIUS, BOX_HALF, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
@@ -123,7 +125,7 @@ fn bias(a: &Shape, b: &Shape, q: &PoseQuery) -> f32 {
         _ => 0.0,
     };
     let t = q.pose_a.inv_mul(&q.pose_b).position;
-    SAT_TOLERANCE * (t.abs().max_elem() + extent(a) + extent(b))
+    SAT_TOLERANCE * (t.length() + extent(a) + extent(b))
 }
 
 #[test]
@@ -220,16 +222,136 @@ fn swapped_pairs_have_the_flipped_normal_and_the_same_depth() {
         let (ms, ws) = (m.min_separation(), w.min_separation());
         assert!((ms - ws).abs() <= DEPTH, "{name} {q:?}: {ms} vs {ws}");
         if angle(m.normal, -w.normal) > ANGLE {
-            // Each order prefers its own A's face: a near-tie of two faces.
-            assert!((ms - ws).abs() <= bias(&a, &b, &q), "{name} {q:?}");
+            // The tie rule is independent of the order: this must not happen.
             ties += 1;
         }
     }
-    eprintln!("{compared} compared, {ties} ties");
-    assert!(
-        compared > 8000 && ties * 1000 <= compared,
-        "{compared} {ties}"
-    );
+    eprintln!("{compared} compared, {ties} asymmetric");
+    assert!(compared > 8000 && ties == 0, "{compared} {ties}");
+}
+
+/// Near-ties of two faces, searched for among random overlapping box pairs (sizes from a
+/// short list, so identical boxes are common): the two boxes' best face separations,
+/// computed in f64, within the axis-choice tolerance of each other while the faces' normals
+/// differ by more than 1e-3 rad. The order-independent tie rule makes both orders pick the
+/// same face: the normals are negated within 1e-5 and the depths agree within 1e-5.
+#[test]
+fn near_ties_of_two_faces_are_broken_the_same_way_in_both_orders() {
+    type V = [f64; 3];
+    let rot = |q: Quat, v: V| -> V {
+        let r = q.rotate(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32));
+        [r.x as f64, r.y as f64, r.z as f64]
+    };
+    let dot = |a: V, b: V| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    // Corners and face normals of a box (world, f64 from f32 rotations: ties are judged
+    // at the tolerance's scale, 3e-5 m, far above this rounding).
+    let corners = |h: Vec3, p: &Iso| -> Vec<V> {
+        (0..8)
+            .map(|i| {
+                let s = |bit: usize, x: f32| if i & bit != 0 { x } else { -x };
+                let c = p.transform_point(Vec3::new(s(1, h.x), s(2, h.y), s(4, h.z)));
+                [c.x as f64, c.y as f64, c.z as f64]
+            })
+            .collect()
+    };
+    let normals = |p: &Iso| -> Vec<V> {
+        let mut out = Vec::new();
+        for axis in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+            let n = rot(p.rotation, axis);
+            out.push(n);
+            out.push([-n[0], -n[1], -n[2]]);
+        }
+        out
+    };
+    // The best face of X against Y: (separation, normal from X towards Y).
+    let best_face = |x: &[V], nx: &[V], y: &[V]| -> (f64, V) {
+        let mut best = (f64::NEG_INFINITY, [0.0; 3]);
+        for &n in nx {
+            let top = x
+                .iter()
+                .map(|v| dot(n, *v))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let low = y.iter().map(|v| dot(n, *v)).fold(f64::INFINITY, f64::min);
+            if low - top > best.0 {
+                best = (low - top, n);
+            }
+        }
+        best
+    };
+    let sizes = [
+        Vec3::splat(0.5),
+        Vec3::new(0.9, 0.3, 0.6),
+        Vec3::new(2.0, 0.5, 2.0),
+    ];
+    let mut rng = SplitMix64::new(77);
+    let (mut ties, mut overlapping) = (0, 0);
+    for _ in 0..200_000 {
+        let ha = sizes[(rng.next_u64() % 3) as usize];
+        let hb = sizes[(rng.next_u64() % 3) as usize];
+        let pa = Iso::new(Vec3::ZERO, rng.rotation());
+        let reach = ha.length() + hb.length();
+        let pb = Iso::new(
+            rng.unit_vector() * rng.range(0.5, 0.9) * reach,
+            rng.rotation(),
+        );
+        let (a, b) = (Shape::cuboid(ha).unwrap(), Shape::cuboid(hb).unwrap());
+        let (va, vb) = (corners(ha, &pa), corners(hb, &pb));
+        let (sa, na) = best_face(&va, &normals(&pa), &vb);
+        let (sb, nb) = best_face(&vb, &normals(&pb), &va);
+        // The edge axes too: overlapping only when no axis of the 15 separates.
+        let (ea, eb) = (normals(&pa), normals(&pb));
+        let edge_apart = ea.iter().step_by(2).any(|&u| {
+            eb.iter().step_by(2).any(|&v| {
+                let c = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
+                let l = dot(c, c).sqrt();
+                l > 1e-6 && {
+                    let c = [c[0] / l, c[1] / l, c[2] / l];
+                    let span = |x: &[V]| {
+                        x.iter()
+                            .map(|p| dot(c, *p))
+                            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                                (lo.min(d), hi.max(d))
+                            })
+                    };
+                    let ((la, ha_), (lb, hb_)) = (span(&va), span(&vb));
+                    lb > ha_ || la > hb_
+                }
+            })
+        });
+        if sa > 0.0 || sb > 0.0 || edge_apart {
+            continue;
+        }
+        overlapping += 1;
+        let t = pa.inv_mul(&pb).position;
+        let tol = SAT_TOLERANCE as f64 * (t.length() + ha.max_elem() + hb.max_elem()) as f64;
+        let tie = (sa - sb).abs() <= tol && dot(na, nb) > -1.0 + 1e-6 / 2.0;
+        let m = contact(&a, &pa, &b, &pb, CONTACT_MARGIN).unwrap();
+        let w = contact(&b, &pb, &a, &pa, CONTACT_MARGIN).unwrap();
+        let (Some(m), Some(w)) = (m, w) else {
+            panic!("{ha:?} {pa:?} {hb:?} {pb:?}: overlapping boxes without a manifold");
+        };
+        let ctx = || format!("{ha:?} {pa:?} {hb:?} {pb:?} {sa} {sb}: {m:?} {w:?}");
+        assert!((m.normal + w.normal).length() <= 1e-5, "{}", ctx());
+        assert!(
+            (m.min_separation() - w.min_separation()).abs() <= 1e-5,
+            "{}",
+            ctx()
+        );
+        if tie
+            && angle(
+                Vec3::new(na[0] as f32, na[1] as f32, na[2] as f32),
+                -Vec3::new(nb[0] as f32, nb[1] as f32, nb[2] as f32),
+            ) > 1e-3
+        {
+            ties += 1;
+        }
+    }
+    eprintln!("{overlapping} overlapping pairs, {ties} near-ties of two faces");
+    assert!(ties >= 5, "the search found only {ties} near-ties");
 }
 
 /// Every float of a manifold, by bits, and every id: "the same output".
@@ -306,6 +428,11 @@ fn narrow_phase_properties_hold_on_the_query_sets() {
         assert_eq!(distance_properties(&a, pa, &b, pb), Ok(()), "{name} {q:?}");
         assert_eq!(
             penetration_properties(&a, pa, &b, pb),
+            Ok(()),
+            "{name} {q:?}"
+        );
+        assert_eq!(
+            separation_properties(&a, pa, &b, pb),
             Ok(()),
             "{name} {q:?}"
         );

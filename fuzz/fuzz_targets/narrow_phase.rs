@@ -1,9 +1,12 @@
 //! Two arbitrary shapes of any kind (hulls from arbitrary points) at two arbitrary poses:
-//! GJK distance, EPA penetration and the contact manifold must satisfy their properties
+//! GJK distance, EPA penetration, the one-shot separation and the contact manifold must
+//! satisfy their properties
 //! (`carom::props`), which also check that invalid poses and margins are rejected.
 #![no_main]
 
-use carom::props::{distance_properties, manifold_properties, penetration_properties};
+use carom::props::{
+    distance_properties, manifold_properties, penetration_properties, separation_properties,
+};
 use carom_fuzz::{PairInput, TOLERANCE_UNIT};
 use libfuzzer_sys::fuzz_target;
 
@@ -16,6 +19,7 @@ fuzz_target!(|input: PairInput| {
     let margin = input.margin.value(TOLERANCE_UNIT);
     assert_eq!(distance_properties(&a, &pose_a, &b, &pose_b), Ok(()));
     assert_eq!(penetration_properties(&a, &pose_a, &b, &pose_b), Ok(()));
+    assert_eq!(separation_properties(&a, &pose_a, &b, &pose_b), Ok(()));
     assert_eq!(
         manifold_properties(&a, &pose_a, &b, &pose_b, margin),
         Ok(())

@@ -278,6 +278,17 @@ impl ClipBuffers {
     }
 }
 
+/// The index after `k` in a cycle of `n` (0 after the last): `(k + 1) % n` without the
+/// division, which has a panic path for `n = 0`.
+#[inline]
+fn next_index(k: usize, n: usize) -> usize {
+    if k + 1 < n {
+        k + 1
+    } else {
+        0
+    }
+}
+
 /// The feature of `face` (a polygon, segment or point in the caller's frame) nearest to
 /// `p`: the face itself when `p` projects inside it by more than a tolerance, else the
 /// nearest boundary edge, or a vertex when the nearest boundary point is within the
@@ -289,7 +300,7 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
     let mut longest = 0.0;
     for k in 0..n {
         let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
-        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        let v1 = verts.get(next_index(k, n)).copied().unwrap_or(v0);
         longest = scalar::max(longest, (v1 - v0).length());
     }
     let tolerance = FEATURE_TOLERANCE * longest;
@@ -320,7 +331,7 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
     let mut best_d2 = f32::INFINITY;
     for k in 0..edges {
         let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
-        let v1 = verts.get((k + 1) % n).copied().unwrap_or(v0);
+        let v1 = verts.get(next_index(k, n)).copied().unwrap_or(v0);
         let e = v1 - v0;
         let e2 = e.length_squared();
         let t = if e2 > 0.0 {
@@ -336,7 +347,10 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
             best = if along <= tolerance {
                 face.vertex_ids.get(k).copied().unwrap_or(face.id)
             } else if back <= tolerance {
-                face.vertex_ids.get((k + 1) % n).copied().unwrap_or(face.id)
+                face.vertex_ids
+                    .get(next_index(k, n))
+                    .copied()
+                    .unwrap_or(face.id)
             } else {
                 face.edge_ids.get(k).copied().unwrap_or(face.id)
             };
@@ -551,7 +565,11 @@ mod tests {
             .iter()
             .map(|&i| (pts[i].point_a.x, pts[i].point_a.z))
             .collect();
-        corners.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        // The crate's panic-free heapsort; the coordinates are finite, `total_cmp` orders
+        // them as `<` does (and would put a NaN last instead of panicking).
+        crate::sort::sort_unstable_by(&mut corners, |a, b| {
+            a.0.total_cmp(&b.0).then(a.1.total_cmp(&b.1)).is_lt()
+        });
         // Farthest from (0, 2): (4, 0) and (4, 4) tie, the lower index (4, 0) wins; the
         // largest triangle adds (4, 4) (twice-area 16); outside that triangle (0, 0) and
         // (0, 4) both add twice-area 8, the lower index (0, 0) wins.

@@ -38,7 +38,7 @@
 //!   separates the shapes. The points are then the two supports along the normal.
 
 use super::gjk::{self, GjkStatus, Simplex, SimplexCache, SimplexVertex, MAX_GJK_ITERATIONS};
-use super::{check_pose, Proxy};
+use super::{check_pose, Placement, Proxy};
 use crate::error::Error;
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
@@ -117,17 +117,19 @@ pub fn penetration(
 ) -> Result<Option<Penetration>, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
-    let b_in_a = pose_a.inv_mul(pose_b);
-    Ok(penetration_in_a(a, b, &b_in_a).map(|p| {
-        let world = Penetration {
-            normal: pose_a.transform_vector(p.normal),
-            point_a: pose_a.transform_point(p.point_a),
-            point_b: pose_a.transform_point(p.point_b),
-            ..p
-        };
-        // Only coordinates near f32::MAX can overflow here.
-        sanitized(world, pose_a.position, pose_b.position)
-    }))
+    let placement = Placement::between(pose_a, pose_b);
+    Ok(
+        penetration_placed(a, b, &placement, EpaCaps::DEFAULT).map(|p| {
+            let world = Penetration {
+                normal: pose_a.transform_vector(p.normal),
+                point_a: pose_a.transform_point(p.point_a),
+                point_b: pose_a.transform_point(p.point_b),
+                ..p
+            };
+            // Only coordinates near f32::MAX can overflow here.
+            sanitized(world, pose_a.position, pose_b.position)
+        }),
+    )
 }
 
 /// The bounds of one EPA run.
@@ -147,20 +149,34 @@ impl EpaCaps {
     };
 }
 
-/// [`penetration`] in A's frame.
+/// [`penetration`] in A's frame, B's matrix in f32 (unit tests).
+#[cfg(test)]
 pub(crate) fn penetration_in_a(a: &Shape, b: &Shape, b_in_a: &Iso) -> Option<Penetration> {
     penetration_in_a_capped(a, b, b_in_a, EpaCaps::DEFAULT)
 }
 
 /// [`penetration_in_a`] with explicit bounds (tests force the bounded exits with it).
+#[cfg(test)]
 pub(crate) fn penetration_in_a_capped(
     a: &Shape,
     b: &Shape,
     b_in_a: &Iso,
     caps: EpaCaps,
 ) -> Option<Penetration> {
+    penetration_placed(a, b, &Placement::new(b_in_a), caps)
+}
+
+/// [`penetration`] in A's frame, with B's placement (pose and matrix) given and explicit
+/// bounds.
+pub(crate) fn penetration_placed(
+    a: &Shape,
+    b: &Shape,
+    placement: &Placement,
+    caps: EpaCaps,
+) -> Option<Penetration> {
+    let b_in_a = &placement.iso;
     let pa = Proxy::at_origin(a);
-    let pb = Proxy::new(b, *b_in_a);
+    let pb = Proxy::placed(b, placement);
     let (ra, rb) = (a.radius(), b.radius());
     let p = match (a, b) {
         (Shape::HalfSpace(_), Shape::HalfSpace(_)) => return None,
@@ -181,7 +197,7 @@ pub(crate) fn penetration_in_a_capped(
 /// pose in A's frame) from the answer of GJK on them (`core`, run from any cache): when
 /// the cores overlap, EPA seeded with GJK's final simplex, so a caller that already ran
 /// GJK does not run it again; when they are apart, GJK's distance against the radii.
-/// `None` when the full shapes do not overlap. The same answer as [`penetration_in_a`]
+/// `None` when the full shapes do not overlap. The same answer as `penetration_in_a`
 /// when `core` came from a fresh cache.
 pub(crate) fn penetration_from_gjk(
     pa: &Proxy,
@@ -190,13 +206,18 @@ pub(crate) fn penetration_from_gjk(
     caps: EpaCaps,
 ) -> Option<Penetration> {
     let (ra, rb) = (pa.shape.radius(), pb.shape.radius());
-    let p = if core.status == GjkStatus::Overlapping {
+    let gap = gjk::radius_gap(core.distance, ra, rb);
+    // Cores apart by less than the rounding of a vertex's or an edge's direction (see
+    // `gjk::GJK_DIRECTION_TOLERANCE`) but overlapping through the radii: GJK's normal is
+    // noise, so EPA on the touching cores gives it (a normal of a face of `D`), at a depth
+    // at most that tolerance deeper than the exact one.
+    let touching_cores = core.ambiguous && gap <= 0.0;
+    let p = if core.status == GjkStatus::Overlapping || touching_cores {
         let c = epa_cores(pa, pb, &core.simplex, caps);
         inflated(c, ra, rb)
     } else {
         // Cores apart: GJK's answer is exact (an upper bound on the core distance,
         // so a lower bound on the depth, when GJK hit its cap).
-        let gap = gjk::radius_gap(core.distance, ra, rb);
         if gap > 0.0 {
             return None;
         }
@@ -215,6 +236,20 @@ pub(crate) fn penetration_from_gjk(
         }
     };
     Some(sanitized(p, Vec3::ZERO, pb.pose.position))
+}
+
+/// The normal (A's frame, from A towards B) that EPA finds for cores GJK left apart by
+/// less than the rounding of its direction ([`gjk::CoreDistance::ambiguous`]): EPA run on
+/// them as touching cores, seeded with GJK's simplex. A normal of a face of `D` next to
+/// the closest vertex or edge, a direction that separates the cores as well as GJK's
+/// within that rounding.
+pub(crate) fn touching_normal(
+    pa: &Proxy,
+    pb: &Proxy,
+    core: &gjk::CoreDistance,
+    caps: EpaCaps,
+) -> Vec3 {
+    epa_cores(pa, pb, &core.simplex, caps).normal
 }
 
 /// The full-shape answer from the cores' answer: depth plus both radii, points moved out
@@ -1021,15 +1056,14 @@ mod tests {
     /// The index of the face on exactly these three vertices.
     fn face_on(poly: &Polytope, v: [u8; 3]) -> usize {
         let mut sorted = v;
-        sorted.sort_unstable();
-        poly.used_faces()
-            .iter()
-            .position(|f| {
-                let mut s = f.v;
-                s.sort_unstable();
-                s == sorted
-            })
-            .unwrap()
+        crate::sort::sort_unstable(&mut sorted);
+        let found = poly.used_faces().iter().position(|f| {
+            let mut s = f.v;
+            crate::sort::sort_unstable(&mut s);
+            s == sorted
+        });
+        assert!(found.is_some(), "no face on {v:?}");
+        found.unwrap_or(0)
     }
 
     #[test]

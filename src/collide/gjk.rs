@@ -27,9 +27,18 @@
 //!    kept; a few steps in a row that leave `|v|²` unchanged within rounding also stop;
 //! 4. [`MAX_GJK_ITERATIONS`] support points were taken ([`GjkStatus::IterationLimit`]).
 //!
+//! Stops 1–3 say "apart" unless the last support point lies clearly past the origin (the
+//! origin within rounding of a triangle inside `D`: [`beyond_origin`]), which means the
+//! cores overlap. The cores count as touching when the simplex is a tetrahedron holding
+//! the origin, when `v` is too short to normalise, or when `v` is on a vertex or an edge
+//! of `D` within f32 rounding of the origin ([`GJK_OVERLAP_TOLERANCE`]); on a face of `D`
+//! the distance is reported down to rounding, so a gap of 1e-6 m reads as 1e-6 m. The
+//! public doors compose B's pose in A's frame in f64 ([`super::Placement::between`]) so
+//! that the pose's own rounding stays below that.
+//!
 //! A half-space has no support point: its pairs are closed forms.
 
-use super::{check_pose, Proxy};
+use super::{check_pose, Placement, Proxy};
 use crate::error::Error;
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
@@ -57,11 +66,27 @@ const GJK_ROUNDING: f32 = 1.0e-6;
 const GJK_MAX_PLATEAU: u32 = 4;
 
 /// Cores closer than this fraction of the size of `D` seen by the run (the longest `|w|`
-/// of any point of `D` it took, the simplex's included) count as overlapping. Rounding in
-/// `v = Σ λ w` is a few ulps of `|w|` (about 1e-7 relative), so exactly touching cores (a
-/// box resting on a box) come out as `|v| ≈ 1e-7 |w|`; 1e-5 keeps a margin of two orders
-/// of magnitude. At a 1 m scale this is 10 µm.
-pub(crate) const GJK_OVERLAP_TOLERANCE: f32 = 1.0e-5;
+/// of any point of `D` it took, the simplex's included) count as touching (distance 0).
+/// `v` is the origin's projection on the closest face, edge or vertex of the simplex,
+/// computed from its vertex nearest the origin ([`s1d`], [`s2d`]), so its error is a few
+/// ulps of the coordinates of `D` (f32: 1.2e-7 relative each): two boxes resting face on
+/// face come out about 1e-7 |w| apart. 2e-7 is that rounding, and no more: at a 1 m scale a
+/// gap of 5e-7 m already reads as itself (`tests/touching.rs` sweeps gaps from 1e-7 m).
+///
+/// This used to be 1e-5: gaps up to 2.5e-5 m between unit boxes read as touching, and the
+/// distance was not monotonic in the gap. The looser value is still what guards the
+/// *direction* of `v` on a vertex or an edge of `D` (see [`GJK_DIRECTION_TOLERANCE`]).
+pub(crate) const GJK_OVERLAP_TOLERANCE: f32 = 2.0e-7;
+
+/// A closest point on a vertex or an edge of `D` (a simplex of 1 or 2 points) closer to
+/// the origin than this fraction of the size of `D` has an accurate length but not an
+/// accurate direction: `v` carries the absolute rounding of the coordinates (about
+/// 1e-7 |w|), and its direction is that error over `|v|`. (On a face of `D` the direction
+/// is the triangle's normal, accurate at any distance.) Such an answer is
+/// [`CoreDistance::ambiguous`]: [`distance`] still reports the exact gap, and EPA, which
+/// takes its normal from faces of `D`, gives the normal of the penetration and of the
+/// contact manifold. 1e-5 bounds the direction's error by 1e-2 rad.
+pub(crate) const GJK_DIRECTION_TOLERANCE: f32 = 1.0e-5;
 
 /// `|v|²` (m²) at or below which `v` has no direction: the floor of
 /// [`Vec3::normalize_and_length`]. Cores this close count as touching whatever their size.
@@ -125,8 +150,8 @@ pub fn distance(
 ) -> Result<DistanceOutput, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
-    let b_in_a = pose_a.inv_mul(pose_b);
-    let out = distance_in_a(a, b, &b_in_a, cache);
+    let placement = Placement::between(pose_a, pose_b);
+    let out = distance_placed(a, b, &placement, cache, MAX_GJK_ITERATIONS);
     let world = DistanceOutput {
         point_a: pose_a.transform_point(out.point_a),
         point_b: pose_a.transform_point(out.point_b),
@@ -161,6 +186,18 @@ pub(crate) fn distance_in_a_capped(
     cache: &mut SimplexCache,
     max_iterations: u32,
 ) -> DistanceOutput {
+    distance_placed(a, b, &Placement::new(b_in_a), cache, max_iterations)
+}
+
+/// [`distance_in_a_capped`] with B's placement (pose and matrix) given.
+pub(crate) fn distance_placed(
+    a: &Shape,
+    b: &Shape,
+    placement: &Placement,
+    cache: &mut SimplexCache,
+    max_iterations: u32,
+) -> DistanceOutput {
+    let b_in_a = &placement.iso;
     let out = match (a, b) {
         (Shape::HalfSpace(_), Shape::HalfSpace(_)) => {
             *cache = SimplexCache::default();
@@ -168,7 +205,7 @@ pub(crate) fn distance_in_a_capped(
         }
         (Shape::HalfSpace(h), _) => {
             *cache = SimplexCache::default();
-            let pb = Proxy::new(b, *b_in_a);
+            let pb = Proxy::placed(b, placement);
             half_space_vs_core(h.normal, &pb, b.radius())
         }
         (_, Shape::HalfSpace(h)) => {
@@ -178,7 +215,7 @@ pub(crate) fn distance_in_a_capped(
         }
         _ => {
             let pa = Proxy::at_origin(a);
-            let pb = Proxy::new(b, *b_in_a);
+            let pb = Proxy::placed(b, placement);
             let core = gjk_cores(&pa, &pb, cache, max_iterations);
             inflate(&core, a.radius(), b.radius())
         }
@@ -716,6 +753,10 @@ pub(crate) struct CoreDistance {
     pub status: GjkStatus,
     /// The final simplex (EPA's seed when the cores overlap).
     pub simplex: Simplex,
+    /// The cores are apart (not [`GjkStatus::Overlapping`]) but the closest point of `D`
+    /// is a vertex or an edge so near the origin that `normal` is rounding noise (see
+    /// [`GJK_DIRECTION_TOLERANCE`]); `distance` is still accurate. EPA gives the normal.
+    pub ambiguous: bool,
 }
 
 /// Rebuild the cached simplex from its vertex indices, or `None` when the cache is empty,
@@ -767,16 +808,49 @@ fn fresh_start(pa: &Proxy, pb: &Proxy) -> Simplex {
     Simplex::single(support(pa, pb, dir))
 }
 
-/// True when `v` is within the overlap tolerance of the origin, relative to `size2`: the
-/// largest `|w|²` of every point of `D` the run has taken (see [`gjk_cores`]); or too
-/// short to give a normal at all (`|v|² <= 1e-20`, the floor of
-/// [`Vec3::normalize_and_length`]): the answer "apart along a fallback normal" would be
-/// wrong, "touching" lets EPA find the direction. False for NaN.
+/// True when the simplex's closest point `v` (on a simplex of `count` points) counts as
+/// the origin: too short to give a normal at all (`|v|² <= 1e-20`, the floor of
+/// [`Vec3::normalize_and_length`]: the answer "apart along a fallback normal" would be
+/// wrong, "touching" lets EPA find the direction); or, on a vertex or an edge of `D`,
+/// within [`GJK_OVERLAP_TOLERANCE`] of the size `size2` (the largest `|w|²` of every point
+/// of `D` the run has taken, see [`gjk_cores`]). On a face of `D` there is no such test:
+/// `v` is then along the face's normal, which is accurate at any distance, and its length
+/// is the gap to within rounding, so the distance of nearly touching faces stays
+/// monotonic in the gap down to rounding instead of dropping to 0 below a threshold.
+/// False for NaN.
 #[inline]
-fn touches_origin(v: Vec3, size2: f32) -> bool {
+fn touches_origin(v: Vec3, count: usize, size2: f32) -> bool {
     let tol2 = GJK_OVERLAP_TOLERANCE * GJK_OVERLAP_TOLERANCE;
     let vv = v.length_squared();
-    vv <= tol2 * size2 || vv <= GJK_NO_DIRECTION
+    vv <= GJK_NO_DIRECTION || (count < 3 && vv <= tol2 * size2)
+}
+
+/// True when the support point `w` of `D` along `−v` lies clearly past the origin: its
+/// lower bound `v·w / |v|` on the distance is below `−GJK_OVERLAP_TOLERANCE · |w|`.
+///
+/// GJK ends on "apart" when `w` brings no progress. With the origin inside `D` but within
+/// rounding of a triangle of the simplex (two concentric boxes, a segment through a box),
+/// `v` is that tiny distance, the support along `−v` is deep on the other side, and the
+/// signed volumes may still drop it (the origin reads as just outside the tetrahedron):
+/// the run would stop with the cores "apart" by 1e-9 m while they overlap by the whole
+/// depth. In exact arithmetic a stop has `v·w >= |v|² >= 0`, so a clearly negative
+/// `v·w` is that rounding case: the origin is within `|v|` of a triangle of `D` and `D`
+/// extends past it, so the cores overlap and EPA gives the depth. False for NaN.
+#[inline]
+fn beyond_origin(v: Vec3, w: Vec3) -> bool {
+    // Squared, without the two square roots: `v·w < 0` and `(v·w)² > tol² |v|² |w|²`.
+    let vw = v.dot(w);
+    let tol2 = GJK_OVERLAP_TOLERANCE * GJK_OVERLAP_TOLERANCE;
+    vw < 0.0 && vw * vw > tol2 * v.length_squared() * w.length_squared()
+}
+
+/// True when a closest point `v` on a simplex of `count` points has no trustworthy
+/// direction (see [`GJK_DIRECTION_TOLERANCE`]): a vertex or an edge of `D` within the
+/// tolerance of the origin. False for NaN.
+#[inline]
+fn direction_is_ambiguous(v: Vec3, count: usize, size2: f32) -> bool {
+    let tol2 = GJK_DIRECTION_TOLERANCE * GJK_DIRECTION_TOLERANCE;
+    count < 3 && v.length_squared() <= tol2 * size2
 }
 
 /// GJK between two cores with signed volumes, warm-started from `cache` and writing the
@@ -801,7 +875,7 @@ pub(crate) fn gjk_cores(
     let mut iterations = 0;
     let mut plateau = 0;
     while iterations < max_iterations {
-        if simplex.count == 4 || touches_origin(v, size2) {
+        if simplex.count == 4 || touches_origin(v, simplex.count, size2) {
             status = GjkStatus::Overlapping;
             break;
         }
@@ -809,15 +883,26 @@ pub(crate) fn gjk_cores(
         let w = support(pa, pb, -v);
         size2 = scalar::max(size2, w.w.length_squared());
         let vv = v.length_squared();
+        // The stops below end on "apart" unless `w` shows `D` reaching clearly past the
+        // origin along `−v` (see `beyond_origin`): then the origin lies within rounding of
+        // the simplex with `D` on both sides of it, and the cores overlap.
+        let v_now = v;
+        let apart = || {
+            if beyond_origin(v_now, w.w) {
+                GjkStatus::Overlapping
+            } else {
+                GjkStatus::Separated
+            }
+        };
         // 1: the lower bound v·w/|v| is within the tolerance of the upper bound |v|.
         let gap = vv - v.dot(w.w);
         if gap <= GJK_RELATIVE_TOLERANCE * scalar::sqrt(vv) * w.w.length() {
-            status = GjkStatus::Separated;
+            status = apart();
             break;
         }
         // 2: nothing new on the boundary.
         if simplex.contains(&w) {
-            status = GjkStatus::Separated;
+            status = apart();
             break;
         }
         let mut grown = simplex;
@@ -838,21 +923,23 @@ pub(crate) fn gjk_cores(
             let rounding = GJK_ROUNDING * scalar::sqrt(vv * grown.max_w_squared());
             let progress = kept && vv_next <= vv + rounding;
             if !progress {
-                status = GjkStatus::Separated;
+                status = apart();
                 break;
             }
             plateau = if vv_next < vv { 0 } else { plateau + 1 };
             if plateau > GJK_MAX_PLATEAU {
                 simplex = next;
                 v = v_next;
-                status = GjkStatus::Separated;
+                status = apart();
                 break;
             }
         }
         simplex = next;
         v = v_next;
     }
-    if status == GjkStatus::IterationLimit && (simplex.count == 4 || touches_origin(v, size2)) {
+    if status == GjkStatus::IterationLimit
+        && (simplex.count == 4 || touches_origin(v, simplex.count, size2))
+    {
         status = GjkStatus::Overlapping;
     }
     write_cache(&simplex, cache);
@@ -867,6 +954,7 @@ pub(crate) fn gjk_cores(
             iterations,
             status,
             simplex,
+            ambiguous: false,
         }
     } else {
         let (normal, distance) = v.normalize_and_length().unwrap_or((Vec3::Y, 0.0));
@@ -878,6 +966,7 @@ pub(crate) fn gjk_cores(
             iterations,
             status,
             simplex,
+            ambiguous: direction_is_ambiguous(v, simplex.count, size2),
         }
     }
 }

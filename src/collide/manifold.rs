@@ -4,7 +4,7 @@
 //! Every pair runs in A's frame (`b_in_a = pose_a⁻¹ ∘ pose_b`) and answers in the world
 //! frame. Pairs are put in a canonical order first (half-space, sphere, capsule, then the
 //! polytopes: cuboid, hull, triangle); a pair given the other way round is computed
-//! swapped and flipped by [`flipped`].
+//! swapped and flipped by [`flip`].
 //!
 //! - Closed forms ([`super::analytic`]): sphere and capsule pairs, half-space against
 //!   anything, sphere against box.
@@ -30,36 +30,34 @@ use super::check_pose;
 use super::clip::{self, MAX_CLIP_POINTS};
 use super::epa;
 use super::gjk::{self, GjkStatus, SimplexCache, MAX_GJK_ITERATIONS};
-use super::sat::{self, PairCache, SatOutcome};
+use super::sat::{self, PairCache, SatOutcome, SAT_TOLERANCE};
 use super::Proxy;
 use crate::error::{non_negative, Error, Input};
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::{Capsule, Face, FeatureId, Shape};
+use core::cmp::Ordering;
 
 /// Most points in a manifold.
 pub const MAX_MANIFOLD_POINTS: usize = 4;
 
-/// Smallest `cos` between the GJK/EPA axis and the best face normal for a face contact
-/// (clipping); below it (about 25.8°) the contact is treated as edge–edge or
-/// vertex–edge and gives one point. Box edges meet at 90°, so an edge–edge axis halfway
-/// between two faces has `cos 45° ≈ 0.71` and never passes; a face tilted by a few degrees
-/// from the axis does.
-pub(crate) const FACE_CONTACT_MIN_COS: f32 = 0.9;
-
-/// A's face stays the reference unless B's is more aligned with the axis by more than this
-/// (in `cos`, about 2.5° near alignment), so the choice does not flip on rounding noise and
-/// a body resting on the ground keeps the ground's exact normal.
-const REFERENCE_FACE_TOLERANCE: f32 = 1.0e-3;
-
-/// A clipped face manifold is refused (one GJK/EPA point is used instead) when its
-/// smallest separation differs from the GJK distance or −EPA depth by more than
-/// `GUARD_ABS + GUARD_REL · |separation|` (m). Deeper means the face normal sees more
-/// overlap than there is (the contact is really an edge); shallower means the deepest
-/// point lies outside the reference face's prism (a corner or cap over the face's edge).
-/// For a true face contact they agree up to EPA's tolerance.
-const GUARD_ABS: f32 = 1.0e-3;
-/// See [`GUARD_ABS`].
-const GUARD_REL: f32 = 0.002;
+/// Tolerance of the general path's face choice, relative to the pair's scale
+/// `|t| + r_A + r_B` (`t` B's position in A's frame, `r` the bounding radii), the same
+/// relative tolerance as the separating axis test's ([`SAT_TOLERANCE`]): about 3e-5 m for
+/// 1 m shapes.
+///
+/// A supporting face becomes the reference face (its normal the manifold's, its clipped
+/// points the manifold's) only when its own separation, measured along its normal with
+/// the other shape's support point, is within this of the GJK distance or −EPA depth: the
+/// face then realises the minimal translation up to that tolerance, which is a few times
+/// EPA's own (1e-5 of the Minkowski difference's size). And the clipped manifold's
+/// deepest point must lie within it of the face's separation (else the deepest point is
+/// outside the reference face's prism: a corner or edge over the face's rim). Otherwise
+/// the contact is an edge or vertex contact and gets one point, at GJK's or EPA's
+/// witnesses along their normal. So the deepest point always agrees with the minimal
+/// depth to about twice this tolerance. (This replaces a normal snapped to any face
+/// within 26° of the axis, kept when it agreed within 1 mm + 0.2 %: on overlapping hull
+/// pairs that reported depths up to 2.2 mm deeper than the minimal one.)
+pub(crate) const GENERAL_FACE_TOLERANCE: f32 = SAT_TOLERANCE;
 
 /// The pair of features, one on each shape, that produced a contact point. It stays the
 /// same for as long as the same features touch, so the solver can match points across
@@ -113,7 +111,7 @@ pub struct Manifold {
 impl Manifold {
     /// The points in use.
     pub fn points(&self) -> &[ManifoldPoint] {
-        &self.points[..(self.len as usize).min(MAX_MANIFOLD_POINTS)]
+        self.points.get(..self.len as usize).unwrap_or(&self.points)
     }
 
     /// The smallest separation over the points (m); `+∞` for an empty manifold.
@@ -376,33 +374,129 @@ fn contact_ordered(
         let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
         return analytic::sphere_cuboid(s, &pose_a, c, &pose_b, margin, out);
     }
-    // B in A's frame: the relative rotation `qa* qb` from the given rotations, renormalised
-    // (so its scale does not wait for A's renormalisation), the position by A's unit one.
-    let b_in_a = Iso::new(
-        unit_a.inverse_rotate(pose_b.position - pose_a.position),
-        (pose_a.rotation.conjugate() * pose_b.rotation).normalize(),
-    );
-    let pose_a = &Iso::new(pose_a.position, unit_a);
-    // Fallback normal for coincident centres or crossing segments: world +Y.
-    let up_in_a = || {
-        pose_a
-            .inverse_transform_vector(Vec3::Y)
-            .normalize_or(Vec3::Y)
-    };
+    let (unit_pose_a, b_in_a) = relative(pose_a, unit_a, pose_b);
     let mut local = LocalManifold::new(Vec3::Y);
     let outcome = match route {
         Route::Fast(cache) => fast_path(a, b, &b_in_a, margin, cache, &mut local),
         Route::General => SatOutcome::Fallback,
     };
     match outcome {
-        SatOutcome::Separated => return false,
-        SatOutcome::Contact => {}
-        SatOutcome::Fallback => match general(a, b, &b_in_a, up_in_a, margin) {
-            Some(m) => local = m,
-            None => return false,
-        },
+        SatOutcome::Separated => false,
+        SatOutcome::Contact => to_world(&local, &unit_pose_a, &b_in_a, margin, out),
+        SatOutcome::Fallback => general_in_canonical_order(a, pose_a, b, pose_b, margin, out),
     }
-    to_world(&local, pose_a, &b_in_a, margin, out)
+}
+
+/// A's pose with its rotation `unit_a` (the given one, normalised) and B in A's frame: the
+/// relative rotation `qa* qb` from the given rotations, renormalised (so its scale does
+/// not wait for A's renormalisation), the position by A's unit rotation.
+fn relative(pose_a: &Iso, unit_a: crate::math::Quat, pose_b: &Iso) -> (Iso, Iso) {
+    let b_in_a = Iso::new(
+        unit_a.inverse_rotate(pose_b.position - pose_a.position),
+        (pose_a.rotation.conjugate() * pose_b.rotation).normalize(),
+    );
+    (Iso::new(pose_a.position, unit_a), b_in_a)
+}
+
+/// The general path ([`general`]) of a pair in canonical rank order, world frame in and
+/// out. Two shapes of the same rank (two polytopes, two capsules, two spheres) are
+/// computed in a canonical order of their own, the one [`pair_order`] puts first as A,
+/// and flipped back when that is B: GJK, EPA, the closed forms and the face choice then
+/// see the same pair the same way whichever order the caller gave, so `contact(B, A)` is
+/// `contact(A, B)` with the normal negated and the sides swapped, to the bit. (Each order
+/// run in its own frame disagreed by rounding, by whole faces where two faces or EPA axes
+/// tie within the tolerances, and for two nearly coaxial capsules by the ill-conditioned
+/// normal of their segments' closest points: fuzz finding `bd34b9f7`.)
+fn general_in_canonical_order(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    out: &mut Manifold,
+) -> bool {
+    let same_rank = order_rank(a) == order_rank(b);
+    if same_rank && pair_order(b, pose_b, a, pose_a) == Ordering::Less {
+        let found = general_in_world(b, pose_b, a, pose_a, margin, out);
+        if found {
+            flip(out);
+        }
+        found
+    } else {
+        general_in_world(a, pose_a, b, pose_b, margin, out)
+    }
+}
+
+/// [`general`] for `a` at `pose_a` and `b` at `pose_b` (world frame, rotations as given),
+/// into `out`.
+fn general_in_world(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    out: &mut Manifold,
+) -> bool {
+    let (pose_a, b_in_a) = relative(pose_a, pose_a.rotation.normalize(), pose_b);
+    // Fallback normal for coincident centres or crossing segments: world +Y, from the
+    // pair's canonical A (see `general_in_canonical_order`) to its B.
+    let up_in_a = || {
+        pose_a
+            .inverse_transform_vector(Vec3::Y)
+            .normalize_or(Vec3::Y)
+    };
+    match general(a, b, &b_in_a, up_in_a, margin) {
+        Some(local) => to_world(&local, &pose_a, &b_in_a, margin, out),
+        None => false,
+    }
+}
+
+/// A total order of two shapes of the same rank with their poses that does not depend on
+/// which is called A: by kind (cuboid, hull, triangle; sphere; capsule), then by their
+/// geometry (half-extents, hull vertices, triangle vertices, radius, half-height and
+/// radius, by `total_cmp`), then by their world poses (position, then rotation). Equal
+/// only for the same geometry at the same pose, where both orders of the pair are the same
+/// query.
+fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
+    let kind = |s: &Shape| match s {
+        Shape::Cuboid(_) => 0u8,
+        Shape::Hull(_) => 1,
+        Shape::Triangle(_) => 2,
+        Shape::Sphere(_) => 3,
+        Shape::Capsule(_) => 4,
+        Shape::HalfSpace(_) => 5,
+    };
+    let vec = |u: Vec3, v: Vec3| {
+        u.x.total_cmp(&v.x)
+            .then(u.y.total_cmp(&v.y))
+            .then(u.z.total_cmp(&v.z))
+    };
+    let points = |p: &[Vec3], q: &[Vec3]| {
+        let mut o = p.len().cmp(&q.len());
+        for (u, v) in p.iter().zip(q) {
+            if o != Ordering::Equal {
+                break;
+            }
+            o = vec(*u, *v);
+        }
+        o
+    };
+    let geometry = match (a, b) {
+        (Shape::Sphere(x), Shape::Sphere(y)) => x.radius.total_cmp(&y.radius),
+        (Shape::Capsule(x), Shape::Capsule(y)) => x
+            .half_height
+            .total_cmp(&y.half_height)
+            .then(x.radius.total_cmp(&y.radius)),
+        (Shape::Cuboid(x), Shape::Cuboid(y)) => vec(x.half_extents, y.half_extents),
+        (Shape::Hull(x), Shape::Hull(y)) => points(x.vertices(), y.vertices()),
+        (Shape::Triangle(x), Shape::Triangle(y)) => points(&x.vertices, &y.vertices),
+        _ => kind(a).cmp(&kind(b)),
+    };
+    let (qa, qb) = (pose_a.rotation, pose_b.rotation);
+    geometry
+        .then(vec(pose_a.position, pose_b.position))
+        .then(vec(qa.xyz(), qb.xyz()))
+        .then(qa.w.total_cmp(&qb.w))
 }
 
 /// The general path of a pair in canonical order (module docs), in A's frame: closed
@@ -561,6 +655,23 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
         if !within {
             return None;
         }
+        if core.ambiguous {
+            // Apart by less than the rounding of GJK's direction (a vertex or an edge of
+            // `D` at the origin, see `gjk::GJK_DIRECTION_TOLERANCE`): EPA on the touching
+            // cores gives the normal, a face normal of `D`; the separation stays GJK's.
+            let n = epa::touching_normal(&pa, &pb, &core, epa::EpaCaps::DEFAULT);
+            let usable = n
+                .normalize_and_length()
+                .filter(|(n, _)| n.dot(d.normal) > 0.0);
+            if let Some((normal, _)) = usable {
+                return finite_axis(Axis {
+                    normal,
+                    separation: (d.point_b - d.point_a).dot(normal),
+                    point_a: d.point_a,
+                    point_b: d.point_b,
+                });
+            }
+        }
         let (normal, _) = d.normal.normalize_and_length()?;
         return finite_axis(Axis {
             normal,
@@ -619,11 +730,27 @@ fn round_feature(shape: &Shape, shape_in_a: &Iso, p: Vec3, outward: Vec3) -> Fea
     }
 }
 
-/// True when a clipped face manifold's smallest separation agrees with the axis's (see
-/// [`GUARD_ABS`]).
-fn plausible(m: &LocalManifold, axis: &Axis) -> bool {
-    let slack = GUARD_ABS + GUARD_REL * scalar::abs(axis.separation);
-    m.len > 0 && scalar::abs(m.min_separation() - axis.separation) <= slack
+/// The face choice's tolerance for a pair (see [`GENERAL_FACE_TOLERANCE`]).
+fn face_tolerance(a: &Shape, b: &Shape, b_in_a: &Iso) -> f32 {
+    GENERAL_FACE_TOLERANCE * (b_in_a.position.length() + a.bounding_radius() + b.bounding_radius())
+}
+
+/// The separation of two shapes along a face's normal: `n · p − n · f₀` with `n` the
+/// face's outward unit normal, `f₀` one of its vertices and `p` the other shape's support
+/// point along `−n` (radius included), all in A's frame. `None` for a face that is not a
+/// polygon (an edge or a vertex). For A's face this is the separation along `n`, for B's
+/// along `−n`: either way from A towards B.
+fn face_separation(face: &Face, other_support: impl Fn(Vec3) -> Vec3) -> Option<f32> {
+    if face.len < 3 {
+        return None;
+    }
+    let n = face.normal;
+    Some(n.dot(other_support(-n)) - n.dot(face.vertices[0]))
+}
+
+/// B's support point (radius included) along `dir` (A's frame), in A's frame.
+fn support_in_a(shape: &Shape, shape_in_a: &Iso, dir: Vec3) -> Vec3 {
+    shape_in_a.transform_point(shape.support(shape_in_a.inverse_transform_vector(dir)))
 }
 
 /// Sphere or capsule `a` against polytope `b` (B at `b_in_a`).
@@ -631,7 +758,9 @@ fn round_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<
     let axis = find_axis(a, b, b_in_a, margin)?;
     let face_b = supporting_face_in_a(b, b_in_a, -axis.normal);
     if let Shape::Capsule(c) = a {
-        if let Some(m) = capsule_on_face(c, &face_b, &axis, margin) {
+        let tol = face_tolerance(a, b, b_in_a);
+        let s_face = face_separation(&face_b, |d| a.support(d));
+        if let Some(m) = capsule_on_face(c, &face_b, s_face, &axis, tol, margin) {
             return Some(m);
         }
     }
@@ -654,11 +783,21 @@ fn single_point(axis: &Axis, id: ContactId, margin: f32) -> Option<LocalManifold
 
 /// A capsule (A, local frame) on a face of B (A's frame): the capsule's segment clipped
 /// against the face's side planes gives up to 2 points, each the segment point and its
-/// projection on the face, along the face normal. `None` when the face is not aligned
-/// with the axis, nothing is within `margin`, or the result fails [`plausible`].
-fn capsule_on_face(c: &Capsule, face: &Face, axis: &Axis, margin: f32) -> Option<LocalManifold> {
-    let aligned = -face.normal.dot(axis.normal) >= FACE_CONTACT_MIN_COS;
-    if face.len < 3 || !aligned {
+/// projection on the face, along the face normal. `None` when the face's separation
+/// `s_face` ([`face_separation`]) is not within `tol` of the axis's (the face does not
+/// realise the minimal translation), nothing is within `margin`, or the deepest point is
+/// more than `tol` shallower than `s_face` (see [`GENERAL_FACE_TOLERANCE`]).
+fn capsule_on_face(
+    c: &Capsule,
+    face: &Face,
+    s_face: Option<f32>,
+    axis: &Axis,
+    tol: f32,
+    margin: f32,
+) -> Option<LocalManifold> {
+    let s_face = s_face?;
+    let realises = s_face >= axis.separation - tol; // false for NaN too
+    if face.len < 3 || !realises {
         return None;
     }
     let (s0, s1) = c.segment();
@@ -684,7 +823,7 @@ fn capsule_on_face(c: &Capsule, face: &Face, axis: &Axis, margin: f32) -> Option
         };
         m.push_within(Candidate::new(point_a, point_b, normal, id), margin);
     }
-    plausible(&m, axis).then_some(m)
+    (m.len > 0 && m.min_separation() <= s_face + tol).then_some(m)
 }
 
 /// Two polytopes (B at `b_in_a`): face clipping when a face is aligned with the axis,
@@ -703,8 +842,13 @@ fn polytope_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Opti
     single_point(&axis, id, margin)
 }
 
-/// The clipped face manifold of two polytopes, or `None` when no face is aligned with the
-/// axis within [`FACE_CONTACT_MIN_COS`] (edge contact) or clipping keeps nothing.
+/// The clipped face manifold of two polytopes, or `None` when neither supporting face
+/// realises the axis's separation within the tolerance (an edge or vertex contact), or
+/// the clipped manifold's deepest point is not on the face's separation (see
+/// [`GENERAL_FACE_TOLERANCE`]). Both faces qualifying, A's is the reference unless B's
+/// separates more by more than the tolerance; the pair's order is canonical (see
+/// [`general_in_canonical_order`]), so this tie rule does not depend on the order the
+/// caller gave.
 fn face_contact(
     a: &Shape,
     b: &Shape,
@@ -714,22 +858,24 @@ fn face_contact(
     axis: &Axis,
     margin: f32,
 ) -> Option<LocalManifold> {
-    let cos_a = face_a.normal.dot(axis.normal);
-    let cos_b = -face_b.normal.dot(axis.normal);
-    let reference_is_a = cos_a + REFERENCE_FACE_TOLERANCE >= cos_b;
-    let (reference, incident, cos) = if reference_is_a {
-        let incident = supporting_face_in_a(b, b_in_a, -face_a.normal);
-        (*face_a, incident, cos_a)
-    } else {
-        (*face_b, a.supporting_face(-face_b.normal), cos_b)
+    let tol = face_tolerance(a, b, b_in_a);
+    let floor = axis.separation - tol;
+    let s_a = face_separation(face_a, |d| support_in_a(b, b_in_a, d)).filter(|s| *s >= floor);
+    let s_b = face_separation(face_b, |d| a.support(d)).filter(|s| *s >= floor);
+    let (reference_is_a, s_ref) = match (s_a, s_b) {
+        (Some(sa), Some(sb)) if sb > sa + tol => (false, sb),
+        (Some(sa), _) => (true, sa),
+        (None, Some(sb)) => (false, sb),
+        (None, None) => return None,
     };
-    let aligned = cos >= FACE_CONTACT_MIN_COS; // false for NaN too
-    if !aligned {
-        return None;
-    }
+    let (reference, incident) = if reference_is_a {
+        (*face_a, supporting_face_in_a(b, b_in_a, -face_a.normal))
+    } else {
+        (*face_b, a.supporting_face(-face_b.normal))
+    };
     let mut m = LocalManifold::new(axis.normal);
     let found = clipped_face_manifold(&reference, &incident, reference_is_a, margin, &mut m);
-    (found && plausible(&m, axis)).then_some(m)
+    (found && m.min_separation() <= s_ref + tol).then_some(m)
 }
 
 /// The face manifold of a reference face and an incident face (both in A's frame; the

@@ -5,6 +5,8 @@
 //!
 //! - [`distance`] (GJK): distance, closest points, separating normal.
 //! - [`penetration`] (EPA): depth and normal of overlapping shapes.
+//! - [`separation`]: both in one: the signed separation (distance apart, minus the depth
+//!   overlapping), the normal and the witness points, whichever the case.
 //! - [`contact`]: a contact manifold of up to 4 points with feature ids; [`contact_cached`]
 //!   the same with a per-pair [`PairCache`] (box and hull pairs by the separating axis
 //!   test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
@@ -17,6 +19,7 @@ mod epa;
 mod gjk;
 mod manifold;
 mod sat;
+mod separation;
 mod toi;
 
 pub use analytic::segment_closest_points;
@@ -27,6 +30,7 @@ pub use manifold::{
     MAX_MANIFOLD_POINTS,
 };
 pub use sat::{PairCache, SatAxis, SAT_TOLERANCE};
+pub use separation::{separation, Separation, SeparationStatus};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
 pub(crate) use gjk::distance_in_a;
@@ -34,7 +38,7 @@ pub(crate) use manifold::contact_cached_unchecked;
 pub(crate) use toi::time_of_impact_unchecked;
 
 use crate::error::{Error, Input};
-use crate::math::Iso;
+use crate::math::{Iso, Mat3, Quat, Vec3};
 use crate::shape::Shape;
 
 /// Check a pose given at a public door: a finite position within
@@ -48,6 +52,106 @@ pub(crate) fn check_pose(pose: &Iso) -> Result<(), Error> {
         return Err(Error::NotUnit(Input::Rotation));
     }
     Ok(())
+}
+
+/// B's pose in A's frame, with its rotation as a matrix: what a query in A's frame needs.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Placement {
+    /// The pose.
+    pub iso: Iso,
+    /// `iso`'s rotation as a matrix.
+    pub rotation: Mat3,
+}
+
+impl Placement {
+    /// `b_in_a` as it is, its matrix computed in f32 (the step's narrow phase).
+    #[inline]
+    pub fn new(b_in_a: &Iso) -> Placement {
+        Placement {
+            iso: *b_in_a,
+            rotation: sat::rotation_matrix(b_in_a.rotation),
+        }
+    }
+
+    /// `pose_a⁻¹ ∘ pose_b` for the public distance doors, composed in f64 and rounded
+    /// once to f32.
+    ///
+    /// Why: in f32, the rotation matrix of a quaternion carries about two ulps in every
+    /// entry and `Rᵀ (p_b − p_a)` a few ulps of `|p_b − p_a|`, so B's vertices land up to
+    /// 1.2e-6 m off in A's frame for shapes 1.5 m apart (measured over 20 000 random
+    /// poses): more than the touching gaps [`distance`] must resolve (1e-6 m, see
+    /// `tests/touching.rs`). In f64 the relative rotation `qa* qb`, its matrix and the
+    /// translation `R_aᵀ (p_b − p_a)` are exact to f64 rounding, and rounding them to f32
+    /// leaves half an ulp per entry. About 100 f64 operations per query. Only `+ − × ÷`
+    /// (IEEE, the same bits on every target); the rotations need not be unit: the matrix
+    /// of `q` is built with `s = 2 / |q|²`, which is a rotation for any `q ≠ 0`.
+    pub fn between(pose_a: &Iso, pose_b: &Iso) -> Placement {
+        let ra = matrix_f64(quat_f64(pose_a.rotation));
+        let d = [
+            f64::from(pose_b.position.x) - f64::from(pose_a.position.x),
+            f64::from(pose_b.position.y) - f64::from(pose_a.position.y),
+            f64::from(pose_b.position.z) - f64::from(pose_a.position.z),
+        ];
+        let t = transpose_mul_f64(&ra, d);
+        // The relative rotation `qa* qb` (products of f32s are exact in f64).
+        let [ax, ay, az, aw] = quat_f64(pose_a.rotation);
+        let [bx, by, bz, bw] = quat_f64(pose_b.rotation);
+        let (ax, ay, az) = (-ax, -ay, -az);
+        let q = [
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+            aw * bw - ax * bx - ay * by - az * bz,
+        ];
+        let [c0, c1, c2] = matrix_f64(q).map(to_f32);
+        let relative = Quat::from_xyzw(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32);
+        Placement {
+            iso: Iso::new(to_f32(t), relative.normalize()),
+            rotation: Mat3::from_cols(c0, c1, c2),
+        }
+    }
+}
+
+/// `q`'s components `(x, y, z, w)` in f64.
+fn quat_f64(q: Quat) -> [f64; 4] {
+    [
+        f64::from(q.x),
+        f64::from(q.y),
+        f64::from(q.z),
+        f64::from(q.w),
+    ]
+}
+
+/// The rotation matrix of `q = (x, y, z, w)` (any `q ≠ 0`) in f64, as three columns.
+fn matrix_f64([x, y, z, w]: [f64; 4]) -> [[f64; 3]; 3] {
+    let n = x * x + y * y + z * z + w * w;
+    let s = if n > 0.0 { 2.0 / n } else { 0.0 };
+    [
+        [
+            1.0 - s * (y * y + z * z),
+            s * (x * y + w * z),
+            s * (x * z - w * y),
+        ],
+        [
+            s * (x * y - w * z),
+            1.0 - s * (x * x + z * z),
+            s * (y * z + w * x),
+        ],
+        [
+            s * (x * z + w * y),
+            s * (y * z - w * x),
+            1.0 - s * (x * x + y * y),
+        ],
+    ]
+}
+
+/// `Mᵀ v` for the columns `m`.
+fn transpose_mul_f64(m: &[[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    m.map(|c| c[0] * v[0] + c[1] * v[1] + c[2] * v[2])
+}
+
+fn to_f32(v: [f64; 3]) -> Vec3 {
+    Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)
 }
 
 /// A shape placed in the query frame (A's frame): what GJK and EPA see. The pose's
@@ -73,6 +177,17 @@ impl<'s, 'a> Proxy<'s, 'a> {
             shape,
             pose,
             rotation: sat::rotation_matrix(pose.rotation),
+            identity: false,
+        }
+    }
+
+    /// `shape` at `placement` (query frame), with the placement's matrix.
+    #[inline]
+    pub fn placed(shape: &'s Shape<'a>, placement: &Placement) -> Proxy<'s, 'a> {
+        Proxy {
+            shape,
+            pose: placement.iso,
+            rotation: placement.rotation,
             identity: false,
         }
     }

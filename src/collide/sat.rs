@@ -52,9 +52,12 @@
 //!
 //! The test keeps the best (largest) separation of each kind, ties to the lowest index,
 //! and stops as soon as one axis separates the shapes by more than the margin. Then:
-//! B's best face is preferred to A's only when it separates by more than the tolerance
-//! `SAT_TOLERANCE · scale`, and the best edge pair to the best face likewise (see
-//! [`SAT_TOLERANCE`]), so a resting contact keeps a stable normal.
+//! one shape's best face is preferred to the other's only when it separates by more than
+//! the tolerance `SAT_TOLERANCE · scale`; within it, a tie rule that does not depend on
+//! which shape is A picks the face (the shapes' geometry, then the face indices: see
+//! `prefers_b`), so `contact(B, A)` chooses the face `contact(A, B)` chose; and the best
+//! edge pair is preferred to that face only when better by more than the tolerance (see
+//! [`SAT_TOLERANCE`]). A resting contact keeps a stable normal.
 //!
 //! - A face axis: the reference face is that face, the incident face the other shape's
 //!   face most anti-parallel to it; the incident face is clipped against the reference
@@ -80,9 +83,10 @@ use crate::math::{scalar, Iso, Mat3, Vec3};
 use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES, MAX_HULL_FACES};
 
 /// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
-/// [`super::contact`]): B's best face must separate more than A's, and the best edge pair
-/// more than the best face, by `SAT_TOLERANCE · scale` (m) to be chosen, with
-/// `scale = |t|∞ + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
+/// [`super::contact`]): one shape's best face must separate more than the other's (within
+/// it a tie rule independent of the argument order decides), and the best edge pair more
+/// than the chosen face, by `SAT_TOLERANCE · scale` (m) to be chosen, with
+/// `scale = |t| + extent(A) + extent(B)` (`t` B's position in A's frame, the extent the
 /// largest core coordinate; for a hull, its build tolerance over
 /// [`crate::shape::ConvexHull::TOLERANCE`]). For 1 m shapes about 3e-5 m: a hundred times the
 /// rounding of a separation (about 1e-7 of the scale), so resting contacts keep their
@@ -236,6 +240,68 @@ pub(crate) trait Polytope {
     fn center(&self) -> Vec3;
     /// The largest core coordinate (m): the size that rounding scales with.
     fn extent(&self) -> f32;
+    /// The shape's geometry, for the tie rule of the axis choice ([`prefers_b`]).
+    fn geometry(&self) -> Geometry<'_>;
+}
+
+/// A polytope's geometry in its local frame, ordered independently of which shape of a
+/// pair is A: boxes before hulls, then by half-extents or by vertex count and vertices
+/// (`total_cmp`, lexicographic).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Geometry<'h> {
+    /// A box's half-extents.
+    Cuboid(Vec3),
+    /// A hull's vertices.
+    Hull(&'h [Vec3]),
+}
+
+impl Geometry<'_> {
+    fn order(&self, other: &Geometry) -> core::cmp::Ordering {
+        use core::cmp::Ordering;
+        let vec = |u: &Vec3, v: &Vec3| {
+            u.x.total_cmp(&v.x)
+                .then(u.y.total_cmp(&v.y))
+                .then(u.z.total_cmp(&v.z))
+        };
+        match (self, other) {
+            (Geometry::Cuboid(x), Geometry::Cuboid(y)) => vec(x, y),
+            (Geometry::Cuboid(_), Geometry::Hull(_)) => Ordering::Less,
+            (Geometry::Hull(_), Geometry::Cuboid(_)) => Ordering::Greater,
+            (Geometry::Hull(p), Geometry::Hull(q)) => {
+                let mut o = p.len().cmp(&q.len());
+                for (u, v) in p.iter().zip(q.iter()) {
+                    if o != Ordering::Equal {
+                        break;
+                    }
+                    o = vec(u, v);
+                }
+                o
+            }
+        }
+    }
+}
+
+/// The tie rule of the axis choice: within the tolerance, B's face `g` is preferred to
+/// A's face `f` when B is the larger shape (its [`Polytope::extent`]: the ground's face
+/// carries a box resting on it), for shapes of the same extent when B's geometry orders
+/// after A's ([`Geometry`]), and for the same geometry when `g > f` (upright boxes: the
+/// lower one's top face, +y, index 3, carries the one above, whose bottom is index 2).
+/// None of it depends on which shape the caller passed first, so `contact(B, A)` picks the
+/// physical face that `contact(A, B)` picked, and none of it changes as the bodies move,
+/// so a resting contact keeps its reference face. The one case it cannot decide, two
+/// copies of one shape touching with faces of the same index, keeps A's face (both are
+/// then within the tolerance of the best depth).
+fn prefers_b<A: Polytope, B: Polytope>(a: &A, f: usize, b: &B, g: usize) -> bool {
+    use core::cmp::Ordering;
+    let order = b
+        .extent()
+        .total_cmp(&a.extent())
+        .then_with(|| b.geometry().order(&a.geometry()));
+    match order {
+        Ordering::Greater => true,
+        Ordering::Less => false,
+        Ordering::Equal => g > f,
+    }
 }
 
 /// The unit vector along local axis `k` (0, 1, anything else → 2), times `s`.
@@ -327,6 +393,9 @@ impl Polytope for Cuboid {
     fn extent(&self) -> f32 {
         self.half_extents.max_elem()
     }
+    fn geometry(&self) -> Geometry<'_> {
+        Geometry::Cuboid(self.half_extents)
+    }
 }
 
 impl Polytope for ConvexHull {
@@ -382,6 +451,9 @@ impl Polytope for ConvexHull {
         // The build tolerance is TOLERANCE times the largest |coordinate|.
         self.tolerance() / ConvexHull::TOLERANCE
     }
+    fn geometry(&self) -> Geometry<'_> {
+        Geometry::Hull(self.vertices())
+    }
 }
 
 /// The best face of one shape.
@@ -426,12 +498,24 @@ impl Choice {
     }
 }
 
-/// The axis choice with its bias (see [`SAT_TOLERANCE`]): B's face over A's, an edge pair
-/// over the faces, each only when better by more than `tol`.
-fn choose(face_a: FaceBest, face_b: FaceBest, edge: Option<EdgeBest>, tol: f32) -> Choice {
+/// The axis choice with its bias (see [`SAT_TOLERANCE`]): the face that separates more by
+/// more than `tol`, else the one the tie rule `prefer_b` ([`prefers_b`], called only on a
+/// tie) names; an edge pair over that face only when better by more than `tol`.
+fn choose(
+    face_a: FaceBest,
+    face_b: FaceBest,
+    edge: Option<EdgeBest>,
+    tol: f32,
+    prefer_b: impl FnOnce(usize, usize) -> bool,
+) -> Choice {
     let face = if face_b.separation > face_a.separation + tol {
         Choice::FaceB(face_b)
+    } else if face_a.separation > face_b.separation + tol {
+        Choice::FaceA(face_a)
+    } else if prefer_b(face_a.index, face_b.index) {
+        Choice::FaceB(face_b)
     } else {
+        // A tie, or a NaN.
         Choice::FaceA(face_a)
     };
     match edge {
@@ -455,6 +539,22 @@ fn face_b_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, g: usiz
     let (m_b, e) = b.plane(g);
     let m = fr.vector(m_b);
     a.min_dot(m) - m.dot(fr.t) - e
+}
+
+/// The separation along the unit axis `n` (A's frame, from A towards B) from both
+/// shapes' support points: `min_B n·x − max_A n·x`, exact for any axis.
+///
+/// An edge pair's separation `n · (p_B − p_A)` is that value only when the two edges are
+/// the supporting features along `±n`, which the Gauss-map test decides from the faces'
+/// normals. A hull whose merged, slightly non-planar face meets a neighbour along an edge
+/// of 0.2 mm (fuzz finding `sat_edge_of_a_merged_face`) has an edge that does not run
+/// along the cross product of its faces' normals; the test then passed a pair whose edge
+/// points were not the supports, and its separation read +4 mm for shapes overlapping by
+/// 39 mm: "apart". Measured with the supports, a wrong pair can only read too low, never
+/// end the test or win the axis choice on a separation the shapes do not have.
+#[inline]
+fn support_separation<A: Polytope, B: Polytope>(a: &A, b: &B, fr: &Frame, n: Vec3) -> f32 {
+    b.min_dot(fr.inv_vector(n)) + n.dot(fr.t) + a.min_dot(-n)
 }
 
 /// A's edge seen from B's frame, for the Gauss-map test: its arc's normals and its vector.
@@ -636,9 +736,17 @@ fn query<A: Polytope, B: Polytope>(
             let ib = ib as usize;
             let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
             let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
-            let Some((normal, s)) = edge_pair(&arc, (p0_b, e_b), (cba, dba), fr, centers) else {
+            let Some((normal, s_edges)) = edge_pair(&arc, (p0_b, e_b), (cba, dba), fr, centers)
+            else {
                 continue;
             };
+            // Only a pair that would end the test or become the best one is measured
+            // again, with the support points (see `support_separation`).
+            let decisive = s_edges > margin || edge.is_none_or(|e| s_edges > e.separation);
+            if !decisive {
+                continue;
+            }
+            let s = support_separation(a, b, fr, normal);
             if s > margin {
                 return Err(SatAxis::Edges(ia as u16, ib as u16));
             }
@@ -682,7 +790,8 @@ fn cached_separates<A: Polytope, B: Polytope>(
             // edge's `n0`, `n1` are those normals) dotted with A's edge.
             let dots = (eb.n0.dot(arc.vector_b), eb.n1.dot(arc.vector_b));
             let edge_b = (eb.p0, eb.p1 - eb.p0);
-            edge_pair(&arc, edge_b, dots, fr, centers).is_some_and(|(_, s)| s > margin)
+            edge_pair(&arc, edge_b, dots, fr, centers)
+                .is_some_and(|(n, s)| s > margin && support_separation(a, b, fr, n) > margin)
         }
     }
 }
@@ -690,7 +799,9 @@ fn cached_separates<A: Polytope, B: Polytope>(
 /// The tolerance of the axis choice for a pair (see [`SAT_TOLERANCE`]).
 #[inline]
 fn tolerance(fr: &Frame, extent_a: f32, extent_b: f32) -> f32 {
-    SAT_TOLERANCE * (fr.t.abs().max_elem() + extent_a + extent_b)
+    // `|t|`, not a component of `t`: the length is the same in either shape's frame (up
+    // to rounding), so both argument orders use the same tolerance.
+    SAT_TOLERANCE * (fr.t.length() + extent_a + extent_b)
 }
 
 /// Two polytopes (B at `b_in_a`): the separating axis test with the cached axis first,
@@ -716,7 +827,7 @@ pub(crate) fn polytopes<A: Polytope, B: Polytope>(
         }
     };
     let tol = tolerance(&fr, a.extent(), b.extent());
-    let choice = choose(face_a, face_b, edge, tol);
+    let choice = choose(face_a, face_b, edge, tol, |f, g| prefers_b(a, f, b, g));
     cache.axis = choice.axis();
     build(a, b, &fr, &choice, margin, tol, out)
 }
@@ -1043,7 +1154,7 @@ pub(crate) fn cuboids(
         }
     };
     let tol = tolerance(&fr, a.extent(), b.extent());
-    let choice = choose(face_a, face_b, edge, tol);
+    let choice = choose(face_a, face_b, edge, tol, |f, g| prefers_b(a, f, b, g));
     cache.axis = choice.axis();
     build(a, b, &fr, &choice, margin, tol, out)
 }

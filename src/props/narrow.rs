@@ -4,8 +4,8 @@
 
 use super::{check, Violation};
 use crate::collide::{
-    distance, penetration, segment_closest_points, EpaStatus, Penetration, SimplexCache,
-    MAX_GJK_ITERATIONS,
+    distance, penetration, segment_closest_points, separation, EpaStatus, Penetration,
+    SeparationStatus, SimplexCache, MAX_GJK_ITERATIONS,
 };
 use crate::error::MAX_COORDINATE;
 use crate::math::{scalar, Iso, Vec3};
@@ -320,6 +320,77 @@ pub fn penetration_properties(
     Ok(())
 }
 
+/// Properties of [`separation`] for `a` at `pose_a` and `b` at `pose_b`:
+///
+/// - it never panics and refuses exactly the invalid poses ([`accepted_pose`]);
+/// - the output is finite with a unit normal; two half-spaces give
+///   [`SeparationStatus::HalfSpaces`] at 0;
+/// - it is the other queries' answer to the bit: `distance` (with a fresh cache) and its
+///   points when that is `> 0`, else minus the depth of `penetration` with its normal and
+///   points (0 when `penetration` finds none);
+/// - in the [`WORKING_RANGE`] with shape sizes in range: `separation(b, a)` is the same
+///   separation within `SLACK · scale`.
+pub fn separation_properties(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+) -> Result<(), Violation> {
+    let valid = accepted_pose(pose_a) && accepted_pose(pose_b);
+    if separation(a, pose_a, b, pose_b).is_err() {
+        return check(!valid, "separation: valid pose refused");
+    }
+    check(valid, "separation: invalid pose accepted")?;
+    let (pose_a, pose_b) = (&unit(pose_a), &unit(pose_b));
+    let s = separation(a, pose_a, b, pose_b)
+        .map_err(|_| Violation("separation: normalised pose refused"))?;
+    check(
+        s.separation.is_finite()
+            && s.normal.is_finite()
+            && s.point_a.is_finite()
+            && s.point_b.is_finite(),
+        "separation: non-finite output",
+    )?;
+    check(is_unit(s.normal), "separation: normal not unit length")?;
+    if matches!((a, b), (Shape::HalfSpace(_), Shape::HalfSpace(_))) {
+        return check(
+            s.status == SeparationStatus::HalfSpaces && s.separation == 0.0,
+            "separation: two half-spaces not reported as such",
+        );
+    }
+    let d = distance(a, pose_a, b, pose_b, &mut SimplexCache::default())
+        .map_err(|_| Violation("separation: GJK refused the poses"))?;
+    if d.distance > 0.0 {
+        check(
+            s.separation == d.distance && s.point_a == d.point_a && s.point_b == d.point_b,
+            "separation: differs from distance",
+        )?;
+    } else {
+        let p = penetration(a, pose_a, b, pose_b)
+            .map_err(|_| Violation("separation: EPA refused the poses"))?;
+        match p {
+            Some(p) => check(
+                s.separation == 0.0 - p.depth
+                    && s.normal == p.normal
+                    && s.point_a == p.point_a
+                    && s.point_b == p.point_b,
+                "separation: differs from minus the penetration depth",
+            )?,
+            None => check(s.separation == 0.0, "separation: touching but not 0")?,
+        }
+    }
+    let scale = query_scale(a, pose_a, b, pose_b);
+    if !in_working_range(a, b, scale) {
+        return Ok(());
+    }
+    let w = separation(b, pose_b, a, pose_a)
+        .map_err(|_| Violation("separation: swapped query refused"))?;
+    check(
+        scalar::abs(w.separation - s.separation) <= SLACK * scale,
+        "separation: separation(b, a) differs from separation(a, b)",
+    )
+}
+
 /// True when the geometric properties apply: the scene scale is at most
 /// [`WORKING_RANGE`] and both shapes' sizes are in range ([`shape_size_in_range`]).
 fn in_working_range(a: &Shape, b: &Shape, scale: f32) -> bool {
@@ -541,7 +612,8 @@ fn gap_along(u: Vec3, a: &[Vec3], b: &[Vec3]) -> f32 {
 /// Brute-force separating-axis test for two vertex sets: the normals of every vertex
 /// triple of each set (a superset of the face normals) and the cross products of every
 /// vertex pair of one with every vertex pair of the other (a superset of the edge
-/// pairs), both signs.
+/// pairs), both signs; and, when a set has at most 3 points, the in-plane side normals of
+/// a flat Minkowski difference.
 fn separating_axis_exists(a: &[Vec3], b: &[Vec3]) -> bool {
     let separates = |u: Vec3| gap_along(u, a, b) > 0.0 || gap_along(-u, a, b) > 0.0;
     for set in [a, b] {
@@ -560,6 +632,48 @@ fn separating_axis_exists(a: &[Vec3], b: &[Vec3]) -> bool {
             for (j, &p2) in b.iter().enumerate() {
                 for &q2 in b.iter().skip(j + 1) {
                     if separates((q1 - p1).cross(q2 - p2)) {
+                        return true;
+                    }
+                }
+            }
+        }
+    }
+    // A set of at most 3 points (a sphere's centre, a capsule's segment, a triangle) can
+    // make the Minkowski difference flat, and a flat difference has faces the candidates
+    // above miss: its sides, normal to its edges within its plane. Those are the small
+    // set's plane normal crossed with its own edges, and an edge-pair normal crossed with
+    // either edge. (Found by the narrow_phase fuzzer: a sphere centred level with a
+    // triangle's far corner, 3 cm past another corner, read as overlapping.)
+    let edges = |set: &[Vec3]| {
+        let mut out = [Vec3::ZERO; 3];
+        let mut n = 0;
+        for (i, &p) in set.iter().enumerate().take(3) {
+            for &q in set.iter().take(3).skip(i + 1) {
+                if let Some(slot) = out.get_mut(n) {
+                    *slot = q - p;
+                    n += 1;
+                }
+            }
+        }
+        (out, n)
+    };
+    for (small, other) in [(a, b), (b, a)] {
+        if small.len() > 3 {
+            continue;
+        }
+        let (own, count) = edges(small);
+        let own = own.get(..count).unwrap_or(&[]);
+        if let [e1, e2, ..] = own {
+            let m = e1.cross(*e2);
+            if own.iter().any(|e| separates(m.cross(*e))) {
+                return true;
+            }
+        }
+        for e in own {
+            for (j, &p) in other.iter().enumerate() {
+                for &q in other.iter().skip(j + 1) {
+                    let u = e.cross(q - p);
+                    if separates(u.cross(*e)) || separates(u.cross(q - p)) {
                         return true;
                     }
                 }

@@ -25,9 +25,12 @@ const WORKING_RANGE: f32 = 1.0e3;
 /// nothing up to about 20 rad (see `collide::toi`), so this leaves a margin of 3.
 const TURN_LIMIT: f32 = core::f32::consts::TAU;
 
-/// GJK's touching threshold, relative to the size of the numbers it works with: cores
-/// closer than this count as touching (distance 0). The value of
-/// `collide::gjk::GJK_OVERLAP_TOLERANCE`, which `props` cannot name.
+/// GJK's touching resolution, relative to the size of the numbers it works with, as the
+/// gap checks assume it: cores closer than this may count as touching (distance 0). A
+/// conservative bound: GJK's own threshold (`collide::gjk::GJK_OVERLAP_TOLERANCE`, which
+/// `props` cannot name) is 2e-7 on vertices and edges of the Minkowski difference and
+/// rounding alone on its faces; 1e-5 is the threshold it had before, kept here so that the
+/// time-of-impact checks stay where they were measured.
 const GJK_TOUCH_RESOLUTION: f32 = 1.0e-5;
 
 /// How many GJK touching thresholds the tolerance must span for the gap checks (see
