@@ -724,3 +724,34 @@ fn finding_an_impulse_may_overflow_a_featherweight_body() {
         assert_eq!(world_ops_properties(&[ball(0.0), push]), Ok(()));
     });
 }
+
+/// Finding `fuzz/findings/world/subnormal-density-inverse-mass-overflows` (a 25-minute
+/// random run of the `world` target): a 6.4 m sphere of density 3.8e-43 kg/m³ (subnormal)
+/// weighs 4.2e-40 kg, whose inverse overflows `f32` to infinity. `add` accepted it with
+/// `inv_mass = inf`, and then even a zero impulse gave `0 · inf = NaN` and was refused,
+/// which the property function rightly calls a violation. Root cause: `add` checked the
+/// mass but not its inverse. Fix: a mass whose inverse is not finite is refused as
+/// `NotPositive(Mass)`, at `add` and at snapshot restore alike.
+#[test]
+fn finding_a_subnormal_density_is_refused_not_inverted_to_infinity() {
+    with_stack(|| {
+        let mut w = OpsWorld::new();
+        let sum = w.checksum();
+        let feather = BodyDesc::dynamic(sphere(6.406372)).density(3.8e-43);
+        assert_eq!(w.add(feather), Err(Error::NotPositive(carom::Input::Mass)));
+        let by_mass = BodyDesc::dynamic(sphere(1.0)).mass(1.0e-40);
+        assert_eq!(w.add(by_mass), Err(Error::NotPositive(carom::Input::Mass)));
+        assert_eq!(w.checksum(), sum, "a refused add changes nothing");
+        // The lightest mass whose inverse is finite is still accepted.
+        let light = BodyDesc::dynamic(sphere(1.0)).mass(1.0e-38);
+        assert!(w.add(light).is_ok());
+        // The finding's call sequence now holds its properties.
+        let WorldOp::Add(mut spec) = ball(0.0) else {
+            unreachable!()
+        };
+        spec.shape = ShapeSpec::Sphere { radius: 6.406372 };
+        spec.mass = carom::MassSpec::Density(3.8e-43);
+        let push = WorldOp::ApplyImpulseAt(HandleRef::Created(0), Vec3::ZERO, Vec3::ZERO);
+        assert_eq!(world_ops_properties(&[WorldOp::Add(spec), push]), Ok(()));
+    });
+}

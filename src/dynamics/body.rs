@@ -98,7 +98,9 @@ impl Default for Material {
     }
 }
 
-/// How a dynamic body's mass is given.
+/// How a dynamic body's mass is given. Either way the resulting mass must be finite and
+/// its inverse too: a mass below about 3e-39 kg (1/m overflows `f32`) or an inertia
+/// without a finite inverse is refused with `NotPositive(Mass)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum MassSpec {
@@ -373,10 +375,13 @@ impl<'a> Body<'a> {
                     .inverse()
                     .filter(|m| m.is_finite())
                     .ok_or(Error::NotPositive(Input::Mass))?;
-                if !(props.mass > 0.0 && props.mass.is_finite()) {
+                // A mass so small that 1/m overflows f32 (below about 3e-39 kg, a
+                // subnormal density) is no mass a solver can use: refused like zero.
+                let inv_mass = 1.0 / props.mass;
+                if !(props.mass > 0.0 && props.mass.is_finite() && inv_mass.is_finite()) {
                     return Err(Error::NotPositive(Input::Mass));
                 }
-                (1.0 / props.mass, inv_i, props.center)
+                (inv_mass, inv_i, props.center)
             }
             BodyKind::Static | BodyKind::Kinematic => (0.0, Mat3::ZERO, Vec3::ZERO),
         };
