@@ -971,3 +971,38 @@ fn same_rank_pairs_run_in_one_order() {
     assert_eq!(m.normal, -w.normal);
     assert_eq!(m.min_separation(), w.min_separation());
 }
+
+/// Root cause (the oracle, not carom): the brute-force distance projects a point on the
+/// plane of every vertex triple, and a sliver triple (three hull vertices nearly on one
+/// line, coordinates of 3.3 m next to 1e-23 m) has a normal made mostly of rounding, so
+/// the projection landed 0.12 m outside the hull and passed the inside test by rounding:
+/// the oracle said 9.63 m where the sphere's centre is 9.75 m from the hull, and GJK was
+/// right. Fix (`props`): slivers (sine of the angle below 1e-5) are skipped; their points
+/// lie within 1e-5 of their size from their edges, which are candidates anyway.
+#[test]
+fn oracle_skips_sliver_triangles() {
+    // crash-c0c33d30 (narrow_phase, a 30-minute random run; fails on the old oracle).
+    let sliver_hull = hull(&[
+        v(0x3c540000, 0x4054d400, 0x4054d400),
+        v(0x4054d400, 0x00000000, 0x40540000),
+        v(0x00000000, 0x40540800, 0x99999999),
+        v(0x999999a0, 0x99999999, 0x99999999),
+        v(0x99999999, 0x84999999, 0x3f1e89b6),
+        v(0x4044c400, 0xc0fa0000, 0x4054d400),
+        v(0x40570c00, 0x4054d400, 0x4054d400),
+        v(0x00000000, 0x4054d400, 0x00000000),
+    ]);
+    let a = Shape::hull(&sliver_hull);
+    let pa = pose(v(0x4054d400, 0x99999999, 0x8da09999), [0, 0, 0, 0x3f800000]);
+    let b = Shape::sphere(f(0x3fd4d800)).unwrap();
+    let pb = Iso::new(
+        v(0xc0cd9600, 0x99999999, 0x99999999),
+        Quat::from_xyzw(f(0xbf35048e), f(0xbf35048e), f(0x3b873adc), 0.0).normalize(),
+    );
+    assert_cases(&[("c0c33d30", a, pa, b, pb, 0.0)]);
+    // The sphere's centre is 9.75 m from the hull's face at x = 3.325 m (world).
+    let va = core_vertices(&a, &pa).unwrap();
+    let vb = core_vertices(&b, &pb).unwrap();
+    let o = brute_force_distance(va.points(), vb.points()).unwrap();
+    assert!((o.distance - 9.75).abs() < 1e-5, "{o:?}");
+}
