@@ -10,6 +10,7 @@ use carom::collide::{
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
     distance_properties, manifold_properties, penetration_properties, separation_properties,
+    FACE_PREFERENCE_DEPTH,
 };
 use carom::rng::SplitMix64;
 use carom::scenes::queries::{
@@ -128,10 +129,23 @@ fn bias(a: &Shape, b: &Shape, q: &PoseQuery) -> f32 {
     SAT_TOLERANCE * (t.length() + extent(a) + extent(b))
 }
 
+/// How much deeper than the minimal penetration `s < 0` a manifold of two polytopes may
+/// be: its face was preferred to a slightly shallower edge pair
+/// (`carom::collide::EDGE_DEPTH_PREFERENCE`).
+fn preference(a: &Shape, b: &Shape, s: f32) -> f32 {
+    let polytope = |x: &Shape| matches!(x, Shape::Cuboid(_) | Shape::Hull(_));
+    if polytope(a) && polytope(b) && s < 0.0 {
+        FACE_PREFERENCE_DEPTH * -s
+    } else {
+        0.0
+    }
+}
+
 #[test]
 fn fast_paths_agree_with_gjk_epa_on_the_query_sets() {
     let hulls = hulls();
     let mut ties = 0;
+    let mut preferred = 0;
     let mut face_contacts = 0;
     let mut found = 0;
     for (name, a, b, q) in pairs(&hulls) {
@@ -146,7 +160,11 @@ fn fast_paths_agree_with_gjk_epa_on_the_query_sets() {
         if s.abs() > TOUCHING {
             assert_eq!(ms > 0.0, s > 0.0, "{name} {q:?}: {ms} vs {s}");
         }
-        assert!((ms - s).abs() <= DEPTH, "{name} {q:?}: depth {ms} vs {s}");
+        let deeper = preference(&a, &b, s);
+        assert!(
+            ms <= s + DEPTH && ms >= s - deeper - DEPTH,
+            "{name} {q:?}: depth {ms} vs {s}"
+        );
         for p in m.points() {
             let off_a = plane_distance(&a, p.local_a);
             let off_b = plane_distance(&b, p.local_b);
@@ -159,24 +177,35 @@ fn fast_paths_agree_with_gjk_epa_on_the_query_sets() {
             face_contacts += 1;
             let off = angle(m.normal, n);
             if off > ANGLE {
-                // Only a near-tie the axis bias decided: the oracle's axis is better, by
-                // no more than the documented tolerance.
+                // Only a near-tie the axis bias decided, or a face preferred to an edge
+                // pair: the oracle's axis is better, by no more than the documented
+                // tolerance and preference.
                 let better = s - ms;
                 assert!(
-                    better >= -TOUCHING && better <= bias(&a, &b, &q),
+                    better >= -TOUCHING && better <= bias(&a, &b, &q) + deeper,
                     "{name} {q:?}: normal off by {off} rad, {ms} vs {s}"
                 );
-                ties += 1;
+                if better <= bias(&a, &b, &q) {
+                    ties += 1;
+                } else {
+                    preferred += 1;
+                }
             }
         }
     }
-    eprintln!("{found} contacts, {face_contacts} face contacts, {ties} bias ties");
+    eprintln!(
+        "{found} contacts, {face_contacts} face contacts, {ties} bias ties, \
+         {preferred} faces preferred to edge pairs"
+    );
     assert!(
         found > 8000 && face_contacts > 2000,
         "{found} {face_contacts}"
     );
-    // Ties are rare: one in a thousand face contacts at most.
-    assert!(ties * 1000 <= face_contacts, "{ties} of {face_contacts}");
+    // Near-ties (the oracle's axis better by no more than the tolerance, yet another
+    // normal) are rare: at most one in twenty face contacts (measured: 127 of 5904, mostly
+    // a face chosen over an edge pair within the tolerance whose clipped manifold now
+    // passes the guard instead of going to the general path).
+    assert!(ties * 20 <= face_contacts, "{ties} of {face_contacts}");
 }
 
 #[test]
@@ -190,7 +219,12 @@ fn the_general_path_agrees_too() {
         match (fast, slow) {
             (Some(f), Some(s)) => {
                 let (fs, ss) = (f.min_separation(), s.min_separation());
-                assert!((fs - ss).abs() <= 1.0e-3 + 0.002 * ss.abs(), "{name} {q:?}");
+                let slack = 1.0e-3 + 0.002 * ss.abs();
+                let deeper = preference(&a, &b, ss);
+                assert!(
+                    fs <= ss + slack && fs >= ss - deeper - slack,
+                    "{name} {q:?}"
+                );
             }
             (None, None) => {}
             (f, s) => {
@@ -634,4 +668,55 @@ fn the_pair_cache_is_small() {
     // "Six bytes" in the PairCache docs: a tag and two u16 indices.
     assert_eq!(core::mem::size_of::<PairCache>(), 6);
     assert_eq!(PairCache::default().axis, SatAxis::Unknown);
+}
+
+/// Boxes resting on boxes with a small tilt (up to 0.05 rad each) and an offset (up to
+/// 0.2 m), overlapping by 1 mm to 20 cm: the manifold is a face contact of 3 or 4 points
+/// in at least 95 % of the pairs (measured 99.6 %; with the exact minimum axis it was 50 %,
+/// an edge pair a few per cent shallower than the face giving one point).
+#[test]
+fn tilted_offset_boxes_on_boxes_get_face_manifolds() {
+    let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+    let mut rng = SplitMix64::new(7);
+    let mut unit = || {
+        Vec3::new(
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+            rng.range(-1.0, 1.0),
+        )
+        .normalize_or(Vec3::Y)
+    };
+    let mut rng2 = SplitMix64::new(8);
+    let (mut pairs, mut faces) = (0, 0);
+    for _ in 0..2000 {
+        let (ua, ub) = (unit(), unit());
+        let pa = Iso::new(
+            Vec3::new(0.0, 0.5, 0.0),
+            Quat::from_axis_angle(ua, rng2.range(0.0, 0.05)),
+        );
+        let depth = rng2.range(0.001, 0.2);
+        let pb = Iso::new(
+            Vec3::new(rng2.range(-0.2, 0.2), 1.5 - depth, rng2.range(-0.2, 0.2)),
+            Quat::from_axis_angle(ub, rng2.range(0.0, 0.05)),
+        );
+        let m = contact(&cube, &pa, &cube, &pb, CONTACT_MARGIN)
+            .unwrap()
+            .unwrap();
+        pairs += 1;
+        if m.len >= 3 {
+            faces += 1;
+        }
+        // Never shallower than the minimal penetration, at most the preference deeper.
+        let p = carom::collide::penetration(&cube, &pa, &cube, &pb)
+            .unwrap()
+            .unwrap();
+        let s = m.min_separation();
+        assert!(
+            s <= -p.depth + DEPTH && s >= -p.depth * (1.0 + FACE_PREFERENCE_DEPTH) - DEPTH,
+            "{s} vs {}",
+            -p.depth
+        );
+    }
+    eprintln!("{faces} of {pairs} tilted offset pairs are face contacts");
+    assert!(faces * 100 >= pairs * 95, "{faces} of {pairs}");
 }

@@ -323,6 +323,14 @@ enum Route<'c> {
 /// Put the pair in canonical order, run it, flip back; the manifold is written to `out`
 /// (true when there is one). Written through one `&mut` rather than returned level by
 /// level: a manifold is about 300 bytes.
+///
+/// The canonical order is by rank ([`order_rank`]), and two polytopes are put in the
+/// order [`polytope_order`] gives (the larger first, whose face the tie rule prefers and
+/// whose frame then gives its normal exactly; then geometry and poses) for the fast paths
+/// as well as the general one: the separating axis test's tie rule cannot tell two copies of one shape
+/// apart when faces of the same index tie, and with faces preferred to slightly
+/// shallower edge pairs (`sat::EDGE_DEPTH_PREFERENCE`) such ties are common between
+/// equal boxes. In one order, `contact(B, A)` is `contact(A, B)` flipped, to the bit.
 fn dispatch(
     a: &Shape,
     pose_a: &Iso,
@@ -332,7 +340,10 @@ fn dispatch(
     route: Route,
     out: &mut Manifold,
 ) -> bool {
-    if order_rank(b) < order_rank(a) {
+    let (rank_a, rank_b) = (order_rank(a), order_rank(b));
+    let swap = rank_b < rank_a
+        || (rank_a == 3 && rank_b == 3 && polytope_order(b, pose_b, a, pose_a) == Ordering::Less);
+    if swap {
         let found = contact_ordered(b, pose_b, a, pose_a, margin, route, out);
         if found {
             flip(out);
@@ -341,6 +352,24 @@ fn dispatch(
     } else {
         contact_ordered(a, pose_a, b, pose_b, margin, route, out)
     }
+}
+
+/// The order of two polytopes with their poses for the fast paths: the larger extent
+/// (largest core coordinate, as the separating axis test measures it) first, then
+/// [`pair_order`]. Independent of which was called A.
+fn polytope_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
+    let extent = |s: &Shape| match s {
+        Shape::Cuboid(c) => c.half_extents.max_elem(),
+        Shape::Hull(h) => h.tolerance() / crate::shape::ConvexHull::TOLERANCE,
+        Shape::Triangle(t) => {
+            let [u, v, w] = t.vertices;
+            u.abs().max(v.abs()).max(w.abs()).max_elem()
+        }
+        _ => 0.0,
+    };
+    extent(b)
+        .total_cmp(&extent(a))
+        .then_with(|| pair_order(a, pose_a, b, pose_b))
 }
 
 /// Canonical order of a pair: the shape with the lower rank is A. Half-space 0, sphere 1,

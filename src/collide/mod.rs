@@ -29,7 +29,7 @@ pub use manifold::{
     contact, contact_cached, contact_gjk_epa, ContactId, Manifold, ManifoldPoint,
     MAX_MANIFOLD_POINTS,
 };
-pub use sat::{PairCache, SatAxis, SAT_TOLERANCE};
+pub use sat::{PairCache, SatAxis, EDGE_DEPTH_PREFERENCE, SAT_TOLERANCE};
 pub use separation::{separation, Separation, SeparationStatus};
 pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
 
