@@ -1006,3 +1006,30 @@ fn oracle_skips_sliver_triangles() {
     let o = brute_force_distance(va.points(), vb.points()).unwrap();
     assert!((o.distance - 9.75).abs() < 1e-5, "{o:?}");
 }
+
+/// Root cause: GJK stops on "overlapping" when the support point along `−v` lies clearly
+/// past the origin (`v·w < 0`), the rounding case of an origin within `|v|` of a triangle
+/// of `D`. For a 1.5 cm sphere 1.2 mm above a box of 8 m × 3 cm × 16 m, seen from the
+/// sphere's frame (turned half a turn and 4° off), the support's rounding on the thin `D`
+/// gave a negative `v·w` at a `v` of 1.2 mm, not at a `v` of rounding size: the cores read
+/// as overlapping, EPA on the touching cores gave the sphere's radius as the depth
+/// (0.01526 m instead of 0.01404 m), and the other order disagreed. Fix: only a `v`
+/// within the direction tolerance of the origin can be that case.
+#[test]
+fn gjk_does_not_call_a_thin_gap_an_overlap() {
+    // crash-a11fe352 (narrow_phase, a 30-minute random run; fails on the old code too).
+    let a = Shape::sphere(f(0x3c7a0000)).unwrap();
+    let pa = pose(v(0, 0x3c820000, 0), [0xbf7fd803, 0x38d69a0d, 0x3d0f115e, 0]);
+    let b = Shape::cuboid(v(0x4078fa00, 0x3c700000, 0x40ff2b00)).unwrap();
+    let pb = pose(v(0, 0, 0), [0, 0, 0, 0x3f800000]);
+    let unit = |p: Iso| Iso::new(p.position, p.rotation.normalize());
+    assert_cases(&[("a11fe352", a, pa, b, pb, 0.0)]);
+    // The sphere's lowest point is 0.61 mm above the box's middle plane: 14.04 mm deep.
+    let expected = f(0x3c700000) - (f(0x3c820000) - f(0x3c7a0000));
+    for (x, px, y, py) in [(&a, pa, &b, pb), (&b, pb, &a, pa)] {
+        let p = carom::collide::penetration(x, &unit(px), y, &unit(py))
+            .unwrap()
+            .unwrap();
+        assert!((p.depth - expected).abs() < 1.0e-6, "{p:?}");
+    }
+}
