@@ -731,7 +731,10 @@ fn finding_an_impulse_may_overflow_a_featherweight_body() {
 /// `inv_mass = inf`, and then even a zero impulse gave `0 · inf = NaN` and was refused,
 /// which the property function rightly calls a violation. Root cause: `add` checked the
 /// mass but not its inverse. Fix: a mass whose inverse is not finite is refused as
-/// `NotPositive(Mass)`, at `add` and at snapshot restore alike.
+/// `NotPositive(Mass)`, at `add` and at snapshot restore alike. A second finding of the
+/// same root cause (`subnormal-density-snapshot-refused`, a 12 m capsule of density
+/// 1.3e-42 kg/m³): restore recomputed the mass, refused it, and so refused the world's
+/// own snapshot.
 #[test]
 fn finding_a_subnormal_density_is_refused_not_inverted_to_infinity() {
     with_stack(|| {
