@@ -80,7 +80,7 @@ pub struct WorldConfig {
     /// Margin (m) by which the broad phase enlarges a moving body's box, so a body that
     /// moves a little keeps its box and its candidate pairs (no search). Default 0.05 m
     /// (half Box2D's 2D `aabbMargin`: in 3D a box has more neighbours within the margin,
-    /// and every such pair holds a contact slot: the `boxes` pile peaks at 8773 pairs with
+    /// and every such pair holds a contact slot: the `boxes` pile peaked at 8773 pairs with
     /// 0.1 m, 5228 with 0.05 m, for the same ~1700 touching contacts); 0 to 10.
     pub aabb_margin: f32,
     /// Relative tangential speed (m/s) below which a contact sticks (static friction).
