@@ -1033,3 +1033,43 @@ fn gjk_does_not_call_a_thin_gap_an_overlap() {
         assert!((p.depth - expected).abs() < 1.0e-6, "{p:?}");
     }
 }
+
+/// Root cause: EPA's witnesses come from the barycentric coordinates of the converged
+/// face's closest point, and for the face chosen it compared s2d's own closest point with
+/// `depth · normal`. Two triangles sharing an edge (7.75 m long), 5e-5 m deep, make a face
+/// of `D` that is a sliver through the origin (two vertices nearly opposite): s2d's point
+/// was right but `Σ lᵢ wᵢ` of its coordinates was 1 cm off, and so were the witnesses
+/// (`point_b − point_a` 1 cm from `−depth · normal`). Fix: coplanar triangles are compared
+/// by `Σ lᵢ wᵢ`, the point the witnesses stand for; when even the best misses by more than
+/// ten EPA tolerances the answer is `Degenerate`, not `Converged`.
+#[test]
+fn epa_witnesses_come_from_the_point_they_stand_for() {
+    // crash-5c0fad2d (narrow_phase, a 30-minute random run; fails on the old code too).
+    let a = Shape::triangle(
+        Vec3::new(7.125244, 7.760254, 7.760254),
+        Vec3::new(7.75, 0.0056152344, 7.7802734),
+        Vec3::new(0.0, 7.7626953, 7.7910156),
+    )
+    .unwrap();
+    let b = Shape::triangle(
+        Vec3::new(7.75, 0.0056152344, 7.7802734),
+        Vec3::new(0.0, 7.7629395, 7.7910156),
+        Vec3::new(-0.56274414, 7.7617188, 7.7910156),
+    )
+    .unwrap();
+    let pa = pose(
+        v(0x40b05a00, 0x39800000, 0x40f8f800),
+        [0x3f1123c0, 0x3e417891, 0x3f1123c0, 0x3f1123c0],
+    );
+    let pb = pose(
+        v(0x40b05a00, 0x39800000, 0x40f8f800),
+        [0x3f1123a0, 0x3e417d10, 0x3f1123a0, 0x3f1123a0],
+    );
+    assert_cases(&[("5c0fad2d", a, pa, b, pb, 0.0)]);
+    let unit = |p: Iso| Iso::new(p.position, p.rotation.normalize());
+    let p = carom::collide::penetration(&a, &unit(pa), &b, &unit(pb))
+        .unwrap()
+        .unwrap();
+    let off = (p.point_b - p.point_a + p.normal * p.depth).length();
+    assert!(off < 1.0e-4, "witnesses {off} m off: {p:?}");
+}
