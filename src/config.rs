@@ -48,7 +48,7 @@ pub struct WorldConfig {
     /// 4 sub-steps, rings unless a second soft iteration is paid for); 0.1 to 1000.
     pub contact_hertz: f32,
     /// Contact damping ratio (dimensionless). Default 5 (over-damped: no bounce from the
-    /// spring; rapier's 5, Box2D v3's 10); 0 to 1000.
+    /// spring; rapier and Box2D v3 use 10); 0 to 1000.
     pub contact_damping_ratio: f32,
     /// Largest speed (m/s) at which the soft contact pushes overlapping bodies apart.
     /// Default 1 m/s (a third of Box2D v3's `contactPushMaxVelocity`: one relax pass per
