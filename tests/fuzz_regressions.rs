@@ -1073,3 +1073,56 @@ fn epa_witnesses_come_from_the_point_they_stand_for() {
     let off = (p.point_b - p.point_a + p.normal * p.depth).length();
     assert!(off < 1.0e-4, "witnesses {off} m off: {p:?}");
 }
+
+/// Root cause (the property, not carom): two hulls touch exactly at time 0 (a vertex of
+/// each at the same point). `time_of_impact` composes the poses in f32 and read a gap of
+/// rounding size, so it answered a hit at time 0; the property's sampler composes them in
+/// f64 (`distance`) and read 0, which it took for overlap. Fix (`props`): at the hit time
+/// and before it, touching within rounding (EPA depth within the GJK slack) is contact,
+/// not overlap.
+#[test]
+fn toi_touching_at_time_zero_is_a_hit() {
+    // crash-02d40795 (toi, a 30-minute random run; fails on the old property).
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let ha = hull(&[
+        p(-7.5964355, -7.602783, 1.4418945),
+        p(1.4431152, 5.709717, 3.7097168),
+        p(5.709717, 0.3137207, 5.6887207),
+        p(0.3137207, 5.6887207, 1.0847168),
+        p(1.4418945, 3.1306152, 5.709717),
+        p(5.709717, 5.709717, 5.709717),
+        p(5.709717, 0.0, 0.0),
+    ]);
+    let hb = hull(&[
+        p(5.709717, 0.3137207, 5.0822754),
+        p(5.0822754, 0.3322754, 5.693115),
+        p(5.709717, 5.709717, 5.709717),
+        p(0.3137207, 0.3137207, 0.3137207),
+        p(0.0, 0.0, 5.709717),
+        p(1.0847168, 5.6916504, 1.0666504),
+        p(1.0666504, 1.0666504, -7.6208496),
+        p(5.709717, 1.4431152, 5.709717),
+        p(0.0, 5.709717, 5.709717),
+        p(5.709717, 1.0847168, 1.0666504),
+        p(5.709717, 5.709717, 0.0),
+    ]);
+    let tiny = -3.3110888e-33;
+    let motion_a = carom::collide::Motion {
+        pose: Iso::new(
+            Vec3::ZERO,
+            Quat::from_xyzw(0.57706, 0.57706, 0.57706, 0.031706594),
+        ),
+        linear: p(20.078125, tiny, tiny),
+        angular: p(tiny, tiny, tiny),
+    };
+    let motion_b = carom::collide::Motion {
+        pose: Iso::new(p(5.709717, 1.4431152, 6.2546444e-36), Quat::IDENTITY),
+        linear: p(92.359375, 6.278338e-36, 20.078125),
+        angular: p(4.2666016, 4.2666016, 4.2666016),
+    };
+    let (a, b) = (Shape::hull(&ha), Shape::hull(&hb));
+    assert_eq!(
+        toi_properties(&a, &motion_a, &b, &motion_b, 0.36761475, 0.09020996),
+        Ok(())
+    );
+}

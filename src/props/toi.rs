@@ -2,7 +2,9 @@
 //! sampled along the motions.
 
 use super::{check, shape_size_in_range, Violation};
-use crate::collide::{distance, movement_bounds, time_of_impact, Motion, SimplexCache, Toi};
+use crate::collide::{
+    distance, movement_bounds, penetration, time_of_impact, Motion, SimplexCache, Toi,
+};
 use crate::math::{Iso, Vec3};
 use crate::shape::Shape;
 
@@ -55,12 +57,12 @@ const UNIT_SLACK: f32 = 1.0e-3;
 /// - there, when moreover GJK can resolve the tolerance (it is at least 10 times GJK's
 ///   touching threshold, 1e-5 of both bounding radii plus the largest distance between
 ///   the origins over the motions; always for a half-space pair): the shapes are apart at
-///   the hit time with a gap of at most `tolerance` (plus GJK slack); `Overlapping` means
-///   GJK distance 0 at time 0;
+///   the hit time (or touching within rounding: EPA depth within the GJK slack) with a gap
+///   of at most `tolerance` (plus GJK slack); `Overlapping` means GJK distance 0 at time 0;
 /// - when moreover the two shapes turn at most one turn in total over `[0, t_max]`: no
-///   contact is missed: [`TOI_EARLIER_SAMPLES`] times before a hit, or
-///   [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after `Separated`, show the shapes
-///   apart.
+///   contact is missed: [`TOI_EARLIER_SAMPLES`] times before a hit (apart or touching
+///   within rounding), or [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after
+///   `Separated`, show the shapes apart.
 pub fn toi_properties(
     a: &Shape,
     motion_a: &Motion,
@@ -119,7 +121,14 @@ pub fn toi_properties(
         } => {
             let gap = pair.gap_at(time)?;
             let slack = GAP_SLACK * (1.0 + pair.scale(t_max));
-            check(gap > 0.0, "toi: shapes overlap at the hit time")?;
+            // Touching within rounding is contact, not overlap: the query composes the
+            // poses in f32 and the sampler in f64 (`distance`), so at an exactly touching
+            // pose one may read 1e-7 m and the other 0 (fuzz finding
+            // `touching-at-time-0-02d40795`).
+            check(
+                gap > 0.0 || pair.depth_at(time)? <= slack,
+                "toi: shapes overlap at the hit time",
+            )?;
             check(
                 gap <= tolerance + slack,
                 "toi: gap at the hit time exceeds the tolerance",
@@ -134,7 +143,7 @@ pub fn toi_properties(
             for k in 0..TOI_EARLIER_SAMPLES {
                 let t = time * (k as f32 / TOI_EARLIER_SAMPLES as f32);
                 check(
-                    pair.gap_at(t)? > 0.0,
+                    pair.gap_at(t)? > 0.0 || pair.depth_at(t)? <= slack,
                     "toi: shapes overlap before the hit (tunnelling)",
                 )?;
             }
@@ -193,6 +202,15 @@ impl Sampler<'_, '_> {
         distance(self.a, &pose_a, self.b, &pose_b, &mut cache)
             .map(|out| out.distance)
             .map_err(|_| Violation("toi: distance refused a pose from Motion::pose_at"))
+    }
+
+    /// EPA's penetration depth at time `t` (0 when the shapes do not overlap).
+    fn depth_at(&self, t: f32) -> Result<f32, Violation> {
+        let pose_a: Iso = self.motion_a.pose_at(t);
+        let pose_b: Iso = self.motion_b.pose_at(t);
+        penetration(self.a, &pose_a, self.b, &pose_b)
+            .map(|p| p.map_or(0.0, |p| p.depth))
+            .map_err(|_| Violation("toi: penetration refused a pose from Motion::pose_at"))
     }
 
     /// The size of the numbers GJK works with (m): coordinates and finite shape sizes.
