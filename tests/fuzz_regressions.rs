@@ -1126,3 +1126,30 @@ fn toi_touching_at_time_zero_is_a_hit() {
         Ok(())
     );
 }
+
+/// Root cause (the property, not carom): `separation_properties` compared the two orders'
+/// separations whatever their status. A 7.9 m capsule around a hull that is nearly flat
+/// in its frame got a `Bounded` answer one way (EPA could not expand the flat Minkowski
+/// difference: depth 7.920 m, an upper bound) and a converged one the other (7.890 m).
+/// Fix (`props`): as for `penetration`, only exact answers are compared.
+#[test]
+fn separation_compares_only_exact_answers() {
+    // crash-a73bb2b0 (narrow_phase, a 30-minute random run; fails on the old property).
+    let a = Shape::capsule(f(0x3fdce000), f(0x40fc7d00)).unwrap();
+    let pa = pose(v(0, 0, 0), [0x3f3fddda, 0x3f2972e8, 0x3b48cc5c, 0x3c472dcf]);
+    let flat = hull(&[
+        v(0x2c2c2c47, 0x00000000, 0xbfe5c800),
+        v(0x000c657c, 0x00000000, 0x4024a400),
+        v(0x00000000, 0x39800000, 0xc0fa0000),
+        v(0x4024a400, 0x4024c400, 0x4024fc00),
+        v(0x4024a400, 0x00000000, 0x00000000),
+    ]);
+    let b = Shape::hull(&flat);
+    let pb = pose(v(0, 0, 0), [0, 0, 0, 0x3f800000]);
+    assert_cases(&[("a73bb2b0", a, pa, b, pb, 0.0)]);
+    let unit = |p: Iso| Iso::new(p.position, p.rotation.normalize());
+    let s = carom::collide::separation(&a, &unit(pa), &b, &unit(pb)).unwrap();
+    let w = carom::collide::separation(&b, &unit(pb), &a, &unit(pa)).unwrap();
+    // Whatever the statuses, both say the shapes overlap by about the capsule's radius.
+    assert!(s.separation < -7.8 && w.separation < -7.8, "{s:?} {w:?}");
+}

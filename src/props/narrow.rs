@@ -328,8 +328,9 @@ pub fn penetration_properties(
 /// - it is the other queries' answer to the bit: `distance` (with a fresh cache) and its
 ///   points when that is `> 0`, else minus the depth of `penetration` with its normal and
 ///   points (0 when `penetration` finds none);
-/// - in the [`WORKING_RANGE`] with shape sizes in range: `separation(b, a)` is the same
-///   separation within `SLACK · scale`.
+/// - in the [`WORKING_RANGE`] with shape sizes in range, unless either order is
+///   [`SeparationStatus::Bounded`]: `separation(b, a)` is the same separation within
+///   `SLACK · scale`.
 pub fn separation_properties(
     a: &Shape,
     pose_a: &Iso,
@@ -385,6 +386,12 @@ pub fn separation_properties(
     }
     let w = separation(b, pose_b, a, pose_a)
         .map_err(|_| Violation("separation: swapped query refused"))?;
+    // A bounded answer (EPA's polytope or iteration bound, or a Minkowski difference too
+    // flat for it) is only a bound, as for `penetration` (fuzz finding
+    // `bounded-capsule-hull-a73bb2b0`: 7.920 m bounded against 7.890 m converged).
+    if s.status == SeparationStatus::Bounded || w.status == SeparationStatus::Bounded {
+        return Ok(());
+    }
     check(
         scalar::abs(w.separation - s.separation) <= SLACK * scale,
         "separation: separation(b, a) differs from separation(a, b)",
