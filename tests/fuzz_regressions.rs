@@ -1153,3 +1153,55 @@ fn separation_compares_only_exact_answers() {
     // Whatever the statuses, both say the shapes overlap by about the capsule's radius.
     assert!(s.separation < -7.8 && w.separation < -7.8, "{s:?} {w:?}");
 }
+
+/// The mirror of `toi_touching_at_time_zero_is_a_hit`: two hulls touching exactly at time
+/// 0, `time_of_impact` (f32 poses) read 0 and answered `Overlapping`, the sampler (f64
+/// poses) read a gap of rounding size. Fix (`props`): `Overlapping` allows a gap within
+/// the GJK slack at time 0.
+#[test]
+fn toi_touching_at_time_zero_may_read_as_overlapping() {
+    // crash-adc4a3f4 (toi, a 30-minute random run; fails on the old property).
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    let ha = hull(&[
+        p(-7.5964355, -7.602783, 1.4418945),
+        p(1.4431152, 5.709717, 3.7097168),
+        p(5.709717, 4.709717, 5.709717),
+        p(5.709717, 0.0, 0.3137207),
+        p(0.3137207, 0.32666016, 5.709717),
+        p(1.0666504, 1.1444008e-28, 1.0666504),
+        p(1.4418945, 3.1306152, 5.709717),
+        p(5.709717, 5.709717, 5.709717),
+        p(5.709717, 0.0, 0.0),
+    ]);
+    let hb = hull(&[
+        p(5.709717, 0.3137207, 5.0822754),
+        p(5.0822754, 0.3322754, 5.693115),
+        p(5.709717, 5.709717, 5.709717),
+        p(0.3137207, 0.3137207, 0.3137207),
+        p(0.0, 0.0, 5.709717),
+        p(1.0666504, 1.0666504, -7.6208496),
+        p(5.709717, 5.333252, 5.709717),
+        p(0.0, 5.709717, 5.709717),
+        p(5.709717, 1.0847168, 1.0666504),
+        p(5.709717, 5.709717, 0.0),
+    ]);
+    let tiny = -3.3110888e-33;
+    let motion_a = carom::collide::Motion {
+        pose: Iso::new(
+            Vec3::ZERO,
+            Quat::from_xyzw(0.57705915, 0.57705915, 0.57705915, 0.031755894),
+        ),
+        linear: p(20.078125, tiny, tiny),
+        angular: p(tiny, tiny, tiny),
+    };
+    let motion_b = carom::collide::Motion {
+        pose: Iso::new(p(5.709717, 1.6543611e-24, 1.2650716e-35), Quat::IDENTITY),
+        linear: p(20.078125, -5.0603046e-35, 20.078125),
+        angular: p(4.2666016, 0.0, 4.2666016),
+    };
+    let (a, b) = (Shape::hull(&ha), Shape::hull(&hb));
+    assert_eq!(
+        toi_properties(&a, &motion_a, &b, &motion_b, 0.26672363, 0.06668091),
+        Ok(())
+    );
+}
