@@ -3,7 +3,7 @@
 
 use super::{accepted_pose, check, shape_size_in_range, Violation};
 use crate::collide::{
-    contact, distance, penetration, Manifold, SimplexCache, EDGE_DEPTH_PREFERENCE,
+    contact, distance, penetration, EpaStatus, Manifold, SimplexCache, EDGE_DEPTH_PREFERENCE,
     MAX_MANIFOLD_POINTS,
 };
 use crate::math::{scalar, Iso, Vec3};
@@ -53,7 +53,8 @@ pub const AGREE_REL: f32 = 0.005;
 /// - the smallest separation agrees with the GJK distance (separated) or minus the EPA
 ///   depth (overlapping) within the slack of [`AGREE_ABS`], except that two overlapping
 ///   polytopes may report up to [`FACE_PREFERENCE_DEPTH`] of the depth deeper (a face
-///   preferred to an edge pair); `None` means GJK sees the shapes further apart than
+///   preferred to an edge pair), and that where EPA only bounds the depth (not
+///   converged) the manifold is merely not deeper than that bound; `None` means GJK sees the shapes further apart than
 ///   `margin` (minus slack);
 /// - symmetry: `contact(b, a)` has the same smallest separation and, unless both shapes
 ///   are polytopes (computed independently in each order), the negated normal.
@@ -248,6 +249,14 @@ fn true_separation(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Option<f
     }
 }
 
+/// True when EPA converged on an overlapping pair (its depth is then exact, not a bound).
+fn epa_converged(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> bool {
+    matches!(
+        penetration(a, pose_a, b, pose_b),
+        Ok(Some(p)) if p.status == EpaStatus::Converged
+    )
+}
+
 fn agree_slack(scale: f32, s: f32) -> f32 {
     AGREE_ABS * scale + AGREE_REL * scalar::abs(s)
 }
@@ -294,6 +303,16 @@ fn agrees_with_gjk_epa(
         return Ok(());
     };
     let slack = agree_slack(scale, s);
+    if s < 0.0 && !epa_converged(a, pose_a, b, pose_b) {
+        // EPA stopped at a bound (a Minkowski difference too thin to expand, or its caps):
+        // its depth is only an upper bound, so the manifold may be shallower, never
+        // deeper (fuzz finding `bounded-capsule-hull-02612b2b`: a capsule whose core just
+        // touches a hull, 7.890 m deep by the manifold, bounded at 8.175 m by EPA).
+        return check(
+            m.min_separation() >= s - slack,
+            "manifold: deeper than EPA's bound",
+        );
+    }
     // Two overlapping polytopes: a face may stand in for a slightly shallower edge pair.
     let deeper = if is_polytope(a) && is_polytope(b) && s < 0.0 {
         FACE_PREFERENCE_DEPTH * -s
