@@ -46,8 +46,8 @@
 //! the whole story: what counts is how long the contact lasts against one march step, so
 //! a large shape spinning fast past a small one can be missed at a smaller turn (fuzz
 //! input `fuzz/open/toi/spinning-hull-passes-a-small-sphere-357f321c`: a 7.6 m hull at
-//! 40 rad/s, 5.2 rad in all, is reported `Separated` from a 16 cm sphere that a sample in
-//! between finds overlapping; not yet traced to the march or to the bound; an open
+//! 40 rad/s, 5.2 rad in all, comes within 7 cm of a 16 cm sphere, exhausts the advances
+//! there and marches past a contact shorter than a march step: `Separated`; an open
 //! finding, see FUZZING.md).
 
 use super::{check_pose, distance_in_a, SimplexCache};
