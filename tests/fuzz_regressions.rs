@@ -1074,6 +1074,37 @@ fn epa_witnesses_come_from_the_point_they_stand_for() {
     assert!(off < 1.0e-4, "witnesses {off} m off: {p:?}");
 }
 
+/// A time-of-impact fuzz case of two hulls: their point clouds, A's and B's motions as
+/// (position, linear velocity, angular velocity), A's rotation (x, y, z, w; B's is the
+/// identity), the time span and the tolerance.
+struct HullToi<'c> {
+    a: &'c [[f32; 3]],
+    b: &'c [[f32; 3]],
+    motion_a: [[f32; 3]; 3],
+    rotation_a: [f32; 4],
+    motion_b: [[f32; 3]; 3],
+    t_max: f32,
+    tolerance: f32,
+}
+
+impl HullToi<'_> {
+    fn properties(&self) -> Result<(), Violation> {
+        let vec = |[x, y, z]: [f32; 3]| Vec3::new(x, y, z);
+        let cloud = |c: &[[f32; 3]]| hull(&c.iter().map(|&p| vec(p)).collect::<Vec<_>>());
+        let motion = |[p, v, w]: [[f32; 3]; 3], q: Quat| carom::collide::Motion {
+            pose: Iso::new(vec(p), q),
+            linear: vec(v),
+            angular: vec(w),
+        };
+        let [x, y, z, w] = self.rotation_a;
+        let motion_a = motion(self.motion_a, Quat::from_xyzw(x, y, z, w));
+        let motion_b = motion(self.motion_b, Quat::IDENTITY);
+        let (ha, hb) = (cloud(self.a), cloud(self.b));
+        let (a, b) = (Shape::hull(&ha), Shape::hull(&hb));
+        toi_properties(&a, &motion_a, &b, &motion_b, self.t_max, self.tolerance)
+    }
+}
+
 /// Root cause (the property, not carom): two hulls touch exactly at time 0 (a vertex of
 /// each at the same point). `time_of_impact` composes the poses in f32 and read a gap of
 /// rounding size, so it answered a hit at time 0; the property's sampler composes them in
@@ -1083,48 +1114,41 @@ fn epa_witnesses_come_from_the_point_they_stand_for() {
 #[test]
 fn toi_touching_at_time_zero_is_a_hit() {
     // crash-02d40795 (toi, a 30-minute random run; fails on the old property).
-    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let ha = hull(&[
-        p(-7.5964355, -7.602783, 1.4418945),
-        p(1.4431152, 5.709717, 3.7097168),
-        p(5.709717, 0.3137207, 5.6887207),
-        p(0.3137207, 5.6887207, 1.0847168),
-        p(1.4418945, 3.1306152, 5.709717),
-        p(5.709717, 5.709717, 5.709717),
-        p(5.709717, 0.0, 0.0),
-    ]);
-    let hb = hull(&[
-        p(5.709717, 0.3137207, 5.0822754),
-        p(5.0822754, 0.3322754, 5.693115),
-        p(5.709717, 5.709717, 5.709717),
-        p(0.3137207, 0.3137207, 0.3137207),
-        p(0.0, 0.0, 5.709717),
-        p(1.0847168, 5.6916504, 1.0666504),
-        p(1.0666504, 1.0666504, -7.6208496),
-        p(5.709717, 1.4431152, 5.709717),
-        p(0.0, 5.709717, 5.709717),
-        p(5.709717, 1.0847168, 1.0666504),
-        p(5.709717, 5.709717, 0.0),
-    ]);
     let tiny = -3.3110888e-33;
-    let motion_a = carom::collide::Motion {
-        pose: Iso::new(
-            Vec3::ZERO,
-            Quat::from_xyzw(0.57706, 0.57706, 0.57706, 0.031706594),
-        ),
-        linear: p(20.078125, tiny, tiny),
-        angular: p(tiny, tiny, tiny),
+    let case = HullToi {
+        a: &[
+            [-7.5964355, -7.602783, 1.4418945],
+            [1.4431152, 5.709717, 3.7097168],
+            [5.709717, 0.3137207, 5.6887207],
+            [0.3137207, 5.6887207, 1.0847168],
+            [1.4418945, 3.1306152, 5.709717],
+            [5.709717, 5.709717, 5.709717],
+            [5.709717, 0.0, 0.0],
+        ],
+        b: &[
+            [5.709717, 0.3137207, 5.0822754],
+            [5.0822754, 0.3322754, 5.693115],
+            [5.709717, 5.709717, 5.709717],
+            [0.3137207, 0.3137207, 0.3137207],
+            [0.0, 0.0, 5.709717],
+            [1.0847168, 5.6916504, 1.0666504],
+            [1.0666504, 1.0666504, -7.6208496],
+            [5.709717, 1.4431152, 5.709717],
+            [0.0, 5.709717, 5.709717],
+            [5.709717, 1.0847168, 1.0666504],
+            [5.709717, 5.709717, 0.0],
+        ],
+        motion_a: [[0.0, 0.0, 0.0], [20.078125, tiny, tiny], [tiny, tiny, tiny]],
+        rotation_a: [0.57706, 0.57706, 0.57706, 0.031706594],
+        motion_b: [
+            [5.709717, 1.4431152, 6.2546444e-36],
+            [92.359375, 6.278338e-36, 20.078125],
+            [4.2666016, 4.2666016, 4.2666016],
+        ],
+        t_max: 0.36761475,
+        tolerance: 0.09020996,
     };
-    let motion_b = carom::collide::Motion {
-        pose: Iso::new(p(5.709717, 1.4431152, 6.2546444e-36), Quat::IDENTITY),
-        linear: p(92.359375, 6.278338e-36, 20.078125),
-        angular: p(4.2666016, 4.2666016, 4.2666016),
-    };
-    let (a, b) = (Shape::hull(&ha), Shape::hull(&hb));
-    assert_eq!(
-        toi_properties(&a, &motion_a, &b, &motion_b, 0.36761475, 0.09020996),
-        Ok(())
-    );
+    assert_eq!(case.properties(), Ok(()));
 }
 
 /// Root cause (the property, not carom): `separation_properties` compared the two orders'
@@ -1161,47 +1185,40 @@ fn separation_compares_only_exact_answers() {
 #[test]
 fn toi_touching_at_time_zero_may_read_as_overlapping() {
     // crash-adc4a3f4 (toi, a 30-minute random run; fails on the old property).
-    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
-    let ha = hull(&[
-        p(-7.5964355, -7.602783, 1.4418945),
-        p(1.4431152, 5.709717, 3.7097168),
-        p(5.709717, 4.709717, 5.709717),
-        p(5.709717, 0.0, 0.3137207),
-        p(0.3137207, 0.32666016, 5.709717),
-        p(1.0666504, 1.1444008e-28, 1.0666504),
-        p(1.4418945, 3.1306152, 5.709717),
-        p(5.709717, 5.709717, 5.709717),
-        p(5.709717, 0.0, 0.0),
-    ]);
-    let hb = hull(&[
-        p(5.709717, 0.3137207, 5.0822754),
-        p(5.0822754, 0.3322754, 5.693115),
-        p(5.709717, 5.709717, 5.709717),
-        p(0.3137207, 0.3137207, 0.3137207),
-        p(0.0, 0.0, 5.709717),
-        p(1.0666504, 1.0666504, -7.6208496),
-        p(5.709717, 5.333252, 5.709717),
-        p(0.0, 5.709717, 5.709717),
-        p(5.709717, 1.0847168, 1.0666504),
-        p(5.709717, 5.709717, 0.0),
-    ]);
     let tiny = -3.3110888e-33;
-    let motion_a = carom::collide::Motion {
-        pose: Iso::new(
-            Vec3::ZERO,
-            Quat::from_xyzw(0.57705915, 0.57705915, 0.57705915, 0.031755894),
-        ),
-        linear: p(20.078125, tiny, tiny),
-        angular: p(tiny, tiny, tiny),
+    let case = HullToi {
+        a: &[
+            [-7.5964355, -7.602783, 1.4418945],
+            [1.4431152, 5.709717, 3.7097168],
+            [5.709717, 4.709717, 5.709717],
+            [5.709717, 0.0, 0.3137207],
+            [0.3137207, 0.32666016, 5.709717],
+            [1.0666504, 1.1444008e-28, 1.0666504],
+            [1.4418945, 3.1306152, 5.709717],
+            [5.709717, 5.709717, 5.709717],
+            [5.709717, 0.0, 0.0],
+        ],
+        b: &[
+            [5.709717, 0.3137207, 5.0822754],
+            [5.0822754, 0.3322754, 5.693115],
+            [5.709717, 5.709717, 5.709717],
+            [0.3137207, 0.3137207, 0.3137207],
+            [0.0, 0.0, 5.709717],
+            [1.0666504, 1.0666504, -7.6208496],
+            [5.709717, 5.333252, 5.709717],
+            [0.0, 5.709717, 5.709717],
+            [5.709717, 1.0847168, 1.0666504],
+            [5.709717, 5.709717, 0.0],
+        ],
+        motion_a: [[0.0, 0.0, 0.0], [20.078125, tiny, tiny], [tiny, tiny, tiny]],
+        rotation_a: [0.57705915, 0.57705915, 0.57705915, 0.031755894],
+        motion_b: [
+            [5.709717, 1.6543611e-24, 1.2650716e-35],
+            [20.078125, -5.0603046e-35, 20.078125],
+            [4.2666016, 0.0, 4.2666016],
+        ],
+        t_max: 0.26672363,
+        tolerance: 0.06668091,
     };
-    let motion_b = carom::collide::Motion {
-        pose: Iso::new(p(5.709717, 1.6543611e-24, 1.2650716e-35), Quat::IDENTITY),
-        linear: p(20.078125, -5.0603046e-35, 20.078125),
-        angular: p(4.2666016, 0.0, 4.2666016),
-    };
-    let (a, b) = (Shape::hull(&ha), Shape::hull(&hb));
-    assert_eq!(
-        toi_properties(&a, &motion_a, &b, &motion_b, 0.26672363, 0.06668091),
-        Ok(())
-    );
+    assert_eq!(case.properties(), Ok(()));
 }
