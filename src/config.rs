@@ -109,6 +109,34 @@ pub struct WorldConfig {
 }
 
 impl WorldConfig {
+    /// The float fields in declaration order (snapshots write them in this order; the
+    /// property functions bound them together).
+    pub(crate) fn float_fields(&self) -> [f32; 21] {
+        [
+            self.gravity.x,
+            self.gravity.y,
+            self.gravity.z,
+            self.dt,
+            self.contact_hertz,
+            self.contact_damping_ratio,
+            self.max_push_speed,
+            self.restitution_threshold,
+            self.slop,
+            self.projection_factor,
+            self.max_projection,
+            self.speculative_margin,
+            self.aabb_margin,
+            self.stick_speed,
+            self.sleep_linear_speed,
+            self.sleep_angular_speed,
+            self.sleep_time,
+            self.ccd_motion_fraction,
+            self.hit_event_speed,
+            self.max_linear_speed,
+            self.max_angular_speed,
+        ]
+    }
+
     /// The defaults listed on each field.
     pub const DEFAULT: WorldConfig = WorldConfig {
         gravity: Vec3::new(0.0, -9.81, 0.0),

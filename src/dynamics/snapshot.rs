@@ -275,29 +275,7 @@ fn get_shape<'a>(
 /// The configuration's fields in declaration order: (floats, counts, flag).
 fn config_fields(c: &WorldConfig) -> ([f32; 21], [u32; 4], bool) {
     (
-        [
-            c.gravity.x,
-            c.gravity.y,
-            c.gravity.z,
-            c.dt,
-            c.contact_hertz,
-            c.contact_damping_ratio,
-            c.max_push_speed,
-            c.restitution_threshold,
-            c.slop,
-            c.projection_factor,
-            c.max_projection,
-            c.speculative_margin,
-            c.aabb_margin,
-            c.stick_speed,
-            c.sleep_linear_speed,
-            c.sleep_angular_speed,
-            c.sleep_time,
-            c.ccd_motion_fraction,
-            c.hit_event_speed,
-            c.max_linear_speed,
-            c.max_angular_speed,
-        ],
+        c.float_fields(),
         [
             c.substeps,
             c.velocity_iterations,

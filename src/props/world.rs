@@ -1232,41 +1232,14 @@ fn op_in_range(op: &WorldOp) -> bool {
     }
 }
 
-/// The float fields of `c`, in declaration order.
-fn config_floats(c: &WorldConfig) -> [f32; 21] {
-    [
-        c.gravity.x,
-        c.gravity.y,
-        c.gravity.z,
-        c.dt,
-        c.contact_hertz,
-        c.contact_damping_ratio,
-        c.max_push_speed,
-        c.restitution_threshold,
-        c.slop,
-        c.projection_factor,
-        c.max_projection,
-        c.speculative_margin,
-        c.aabb_margin,
-        c.stick_speed,
-        c.sleep_linear_speed,
-        c.sleep_angular_speed,
-        c.sleep_time,
-        c.ccd_motion_fraction,
-        c.hit_event_speed,
-        c.max_linear_speed,
-        c.max_angular_speed,
-    ]
-}
-
 /// Every float field of `c` is in the working range and `dt <=` [`WORLD_MAX_DT`].
 fn config_in_range(c: &WorldConfig) -> bool {
-    c.dt <= WORLD_MAX_DT && config_floats(c).iter().all(|x| tame(*x))
+    c.dt <= WORLD_MAX_DT && c.float_fields().iter().all(|x| tame(*x))
 }
 
 /// True when every float field of `c` is finite.
 fn config_finite(c: &WorldConfig) -> bool {
-    config_floats(c).iter().all(|x| x.is_finite())
+    c.float_fields().iter().all(|x| x.is_finite())
 }
 
 /// The documented bounds of `WorldConfig` (its field docs), restated here independently
