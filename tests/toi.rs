@@ -166,6 +166,8 @@ fn moving_spheres_match_the_closed_form() {
                 assert!(g > 0.0, "separated but the closest gap is {g}");
             }
             Toi::Overlapping => panic!("overlapping reported with gap {gap0} at time 0"),
+            // Translating spheres have an exact bound: advancement alone finishes.
+            Toi::Unresolved { time } => panic!("unresolved at {time} for moving spheres"),
         }
     }
     assert!(
@@ -302,6 +304,129 @@ fn spinning_rod_matches_the_rotating_face_formula() {
     }
     assert!(checked > 100, "{checked}");
     std::println!("spinning rod: {checked} face hits, largest gap {worst_gap:.2e}");
+}
+
+/// A rod spinning fast about its own long axis (600 rad/s, 10 rad over the window) beside
+/// a ball whose surface stands 0.2 mm inside the circle of the rod's edges: each edge
+/// clips the ball for about 0.26 ms. The closing-speed bound takes the distance of the
+/// rod's edges from the spin axis (7 cm: 42 m/s), not its 4 m reach (2400 m/s, 140 times
+/// the edges' real speed, under which advancement crawled). Brute force (GJK every 0.5 µs)
+/// sees the touch; the answer must be a hit before it, never `Separated`.
+#[test]
+fn a_rod_spinning_about_its_axis_clips_a_ball_and_is_not_missed() {
+    let rod = Shape::cuboid(Vec3::new(4.0, 0.05, 0.05)).unwrap();
+    let ball = Shape::sphere(0.02).unwrap();
+    let (t_max, tol) = (1.0f32 / 60.0, 1.0e-3f32);
+    let edge = 0.05f32 * core::f32::consts::SQRT_2;
+    for (i, &(start, x)) in [(0.0f32, 3.0f32), (0.4, -2.0), (-0.3, 0.5)]
+        .iter()
+        .enumerate()
+    {
+        let rod_motion = Motion {
+            pose: Iso::new(Vec3::ZERO, Quat::from_axis_angle(Vec3::X, start)),
+            linear: Vec3::ZERO,
+            angular: Vec3::new(600.0, 0.0, 0.0),
+        };
+        let ball_motion = still(Vec3::new(x, edge - 2.0e-4 + 0.02, 0.0));
+        let toi = time_of_impact(&rod, &rod_motion, &ball, &ball_motion, t_max, tol).unwrap();
+        let touch = brute_force_touch(&rod, &rod_motion, &ball, &ball_motion, t_max)
+            .expect("an edge clips the ball");
+        let Toi::Hit { time, .. } = toi else {
+            panic!("case {i}: {toi:?}, brute force touches at {touch}");
+        };
+        assert!(time <= touch, "case {i}: {time} after the touch at {touch}");
+        let gap = gjk_gap(&rod, &rod_motion, &ball, &ball_motion, time);
+        assert!(
+            gap > 0.0 && gap <= tol + 1e-5,
+            "case {i}: gap {gap} at {time}"
+        );
+    }
+}
+
+/// The first time, in steps of 0.5 µs over `[0, t_max]`, at which GJK finds the shapes
+/// touching.
+fn brute_force_touch(a: &Shape, ma: &Motion, b: &Shape, mb: &Motion, t_max: f32) -> Option<f32> {
+    let h = 5.0e-7;
+    (0..=(t_max / h) as u32)
+        .map(|k| k as f32 * h)
+        .find(|&t| gjk_gap(a, ma, b, mb, t) <= 0.0)
+}
+
+/// A 32-sided polygonal wheel (a hull of 64 points, radius 1 m, axle along y). Spinning
+/// at 300 rad/s about its axle beside a wall, its gap changes by 5 mm at most while the
+/// closing-speed bound counts its 300 m/s rim: advancement crawls and the certified
+/// search runs.
+fn wheel() -> ConvexHull {
+    let mut points = Vec::new();
+    for k in 0..32 {
+        let a = k as f32 * core::f32::consts::TAU / 32.0;
+        for y in [-0.5f32, 0.5] {
+            points.push(Vec3::new(a.cos(), y, a.sin()));
+        }
+    }
+    ConvexHull::new(&points).unwrap()
+}
+
+/// The wheel of [`wheel`] with a wall 0.3 mm inside the circle of its rim corners: each
+/// corner clips the wall for 0.16 ms after the wheel has crawled a quarter of a
+/// millisecond at a few millimetres. The search finds the first clip (brute force, GJK
+/// every 0.5 µs, agrees); the old fallback, 32 equal steps of 0.5 ms, could step over it.
+#[test]
+fn a_spinning_polygonal_wheel_clipping_a_wall_is_found_by_the_search() {
+    let hull = wheel();
+    let wheel = Shape::hull(&hull);
+    let wall = Shape::cuboid(Vec3::new(0.5, 2.0, 2.0)).unwrap();
+    let (t_max, tol) = (1.0f32 / 60.0, 1.0e-4f32);
+    for (i, &start) in [0.0f32, 0.05, -0.06].iter().enumerate() {
+        let spin = Motion {
+            // A face, not a corner, faces the wall at the start (half a sector turned).
+            pose: Iso::new(
+                Vec3::ZERO,
+                Quat::from_axis_angle(Vec3::Y, core::f32::consts::PI / 32.0 + start),
+            ),
+            linear: Vec3::ZERO,
+            angular: Vec3::new(0.0, 300.0, 0.0),
+        };
+        let wall_motion = still(Vec3::new(0.9997 + 0.5, 0.0, 0.0));
+        let toi = time_of_impact(&wheel, &spin, &wall, &wall_motion, t_max, tol).unwrap();
+        let touch = brute_force_touch(&wheel, &spin, &wall, &wall_motion, t_max)
+            .expect("a corner clips the wall");
+        let Toi::Hit { time, .. } = toi else {
+            panic!("case {i}: {toi:?}, brute force touches at {touch}");
+        };
+        assert!(time <= touch, "case {i}: {time} after the touch at {touch}");
+        let gap = gjk_gap(&wheel, &spin, &wall, &wall_motion, time);
+        assert!(
+            gap > 0.0 && gap <= tol + 1e-5,
+            "case {i}: gap {gap} at {time}"
+        );
+    }
+}
+
+/// The same wheel 2 mm clear of the wall for the whole window: nothing touches, but the
+/// bound cannot certify 1/60 s at a few millimetres under 300 m/s within the budget. It
+/// ends in `Unresolved`, with a time up to which the shapes are certainly apart, never a
+/// claimed hit or a guess.
+#[test]
+fn a_budget_that_runs_out_is_unresolved_not_a_guess() {
+    let hull = wheel();
+    let wheel = Shape::hull(&hull);
+    let wall = Shape::cuboid(Vec3::new(0.5, 2.0, 2.0)).unwrap();
+    let spin = Motion {
+        pose: Iso::IDENTITY,
+        linear: Vec3::ZERO,
+        angular: Vec3::new(0.0, 300.0, 0.0),
+    };
+    let wall_motion = still(Vec3::new(1.0 + 0.002 + 0.5, 0.0, 0.0));
+    let (t_max, tol) = (1.0f32 / 60.0, 1.0e-3f32);
+    let toi = time_of_impact(&wheel, &spin, &wall, &wall_motion, t_max, tol).unwrap();
+    let Toi::Unresolved { time } = toi else {
+        panic!("expected the budget to run out: {toi:?}");
+    };
+    assert!((0.0..t_max).contains(&time), "{time}");
+    assert!(brute_force_touch(&wheel, &spin, &wall, &wall_motion, t_max).is_none());
+    let gap = gjk_gap(&wheel, &spin, &wall, &wall_motion, time);
+    assert!(gap >= 0.002 - 1e-5, "gap {gap} at {time}");
 }
 
 /// The rod's end sweeping past a sphere near its tip, against brute force: GJK sampled
@@ -562,6 +687,7 @@ fn toi_properties_hold_on_random_pairs() {
             Toi::Hit { .. } => 0,
             Toi::Separated => 1,
             Toi::Overlapping => 2,
+            Toi::Unresolved { .. } => 3,
         }] += 1;
     }
     assert!(

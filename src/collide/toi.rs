@@ -1,5 +1,5 @@
 //! Time of impact of two moving shapes by conservative advancement on GJK distance, with
-//! a bounded march and bisection as the fallback; and movement bounds for the broad phase.
+//! a certified bisection search as the fallback; and movement bounds for the broad phase.
 //!
 //! # Conservative advancement
 //!
@@ -13,11 +13,12 @@
 //! ```
 //!
 //! lower-bounds their distance while it is positive. A point `x` of A moves with
-//! `v_a + ω_a × r`, `r = x − c_a`, so `n·ẋ = n·v_a + ω_a·(r × n) <= n·v_a + |ω_a⊥| ρ_a`,
-//! with `ω_a⊥ = ω_a − (ω_a·n) n` (spin about `n` itself moves nothing along `n`) and `ρ_a`
-//! the largest distance of a core point from A's local origin (the radius that inflates a
-//! sphere or capsule does not move under a rotation about the origin, so it does not
-//! count). Hence
+//! `v_a + ω_a × r`, `r = x − c_a`, so `n·ẋ = n·v_a + n·(ω_a × r) <= n·v_a + |ω_a⊥| ρ_a`,
+//! with `ω_a⊥ = ω_a − (ω_a·n) n` (spin about `n` itself moves nothing along `n`; `|ω_a⊥|`
+//! is `|n × ω_a|`) and `ρ_a` the largest distance of a core point from A's spin axis
+//! through its local origin ([`spin_reach`]: `ω × r` only sees the part of `r` across the
+//! axis; the radius that inflates a sphere or capsule does not move under a rotation about
+//! the origin, so it does not count). Hence
 //!
 //! ```text
 //! s(τ) >= d − μ (τ − t),      μ = (v_a − v_b)·n + |ω_a⊥| ρ_a + |ω_b⊥| ρ_b     (m/s),
@@ -32,23 +33,36 @@
 //! rotation about the fixed axis `ω` by the angle `φ(τ) = 2 atan(|ω| τ / 2)`, whose rate
 //! `|ω| / (1 + (|ω| τ / 2)²)` never exceeds `|ω|`. So the bound above holds for it.
 //!
-//! # Fallback
+//! # Certified search
 //!
 //! Advancement crawls when `μ` is much larger than the real closing speed (a fast spin
-//! with a near miss). After [`MAX_TOI_ITERATIONS`] advances the rest of `[t, t_max]` is
-//! marched in at least [`TOI_MARCH_STEPS`] equal steps (a step is longer when the bound
-//! allows it); the first sample within the tolerance is bracketed with the previous one
-//! and the crossing of `distance = tolerance` is found by [`MAX_TOI_BISECTIONS`] rounds of
-//! bisection. Only this fallback can miss a contact: one that starts and ends between two
-//! march samples. Measured on random close pairs of boxes, capsules, hulls and spheres:
-//! no miss while the two shapes turn less than about 20 rad in total over `[0, t_max]`
-//! (over 3 turns; a 1/60 s step at 1000 rad/s); misses appear beyond that. The turn is not
-//! the whole story: what counts is how long the contact lasts against one march step, so
-//! a large shape spinning fast past a small one can be missed at a smaller turn (fuzz
-//! input `fuzz/open/toi/spinning-hull-passes-a-small-sphere-357f321c`: a 7.6 m hull at
-//! 40 rad/s, 5.2 rad in all, comes within 7 cm of a 16 cm sphere, exhausts the advances
-//! there and marches past a contact shorter than a march step: `Separated`; an open
-//! finding, see FUZZING.md).
+//! with a near miss: a long shape turning past a small one). After [`MAX_TOI_ITERATIONS`]
+//! advances the rest of `[t, t_max]` is searched by bisection in which every interval is
+//! either certified free of contact or split. The bound above also runs backwards: from a
+//! sample at `t₁` with gap `d₁` and normal `n₁`,
+//!
+//! ```text
+//! s(τ) >= d₁ − μ'₁ (t₁ − τ),   μ'₁ = (v_b − v_a)·n₁ + |ω_a⊥| ρ_a + |ω_b⊥| ρ_b,   τ <= t₁,
+//! ```
+//!
+//! so two samples at `t₀ < t₁` keep the gap above a level `c > 0` on `[t₀, u₀]` and on
+//! `[u₁, t₁]`, with `u₀ = t₀ + (d₀ − c)/μ₀` and `u₁ = t₁ − (d₁ − c)/μ'₁`. When `u₀ >= u₁`
+//! the interval is certified; otherwise it is split in the middle of `[u₀, u₁]`, the part
+//! nobody vouches for. Intervals are taken in time order (a stack of right ends), so the
+//! first sample within the tolerance that closes a certified interval is the first
+//! approach; the crossing of `distance = tolerance` is then found by
+//! [`MAX_TOI_BISECTIONS`] rounds of bisection inside that certified interval.
+//!
+//! The search never misses a contact (up to GJK's accuracy, which the level `c`, half the
+//! tolerance, absorbs). What it cannot promise is to finish: a shape grazing another for
+//! a long time at a gap far below `μ` times that time (a many-sided polygonal wheel
+//! spinning beside a wall: its bound counts the rim speed, its gap barely changes) needs
+//! more samples
+//! than [`TOI_SEARCH_SAMPLES`]. It then answers [`Toi::Unresolved`] with the last time
+//! up to which no contact is certain: the work stays bounded and nothing is missed
+//! silently. (The earlier fallback, 32 equal march steps, missed short contacts: fuzz
+//! finding `spinning-hull-passes-a-small-sphere-357f321c`, a 7.6 m hull at 40 rad/s
+//! passing a 16 cm sphere.)
 
 use super::{check_pose, distance_in_a, SimplexCache};
 use crate::error::{finite_vec, positive, Error, Input};
@@ -58,8 +72,14 @@ use crate::shape::Shape;
 /// Iteration cap of the time-of-impact loop: conservative advances before the fallback.
 pub const MAX_TOI_ITERATIONS: u32 = 64;
 
-/// Fewest equal steps the fallback march takes over what is left of `[0, t_max]`.
-pub(crate) const TOI_MARCH_STEPS: u32 = 32;
+/// Most GJK samples the certified search takes after the advances (module docs): the
+/// work budget of the fallback.
+pub const TOI_SEARCH_SAMPLES: u32 = 256;
+
+/// Most right ends of intervals the certified search keeps waiting (a stack): its depth
+/// of subdivision. Halving a window of `[0, 10]` s 32 times leaves 2.3 ns; a search that
+/// would go deeper answers [`Toi::Unresolved`].
+const TOI_SEARCH_DEPTH: usize = 32;
 
 /// Rounds of bisection that locate the crossing of `distance = tolerance` in the fallback.
 /// 24 rounds shrink the bracket below one `f32` ulp of the time for any bracket.
@@ -110,6 +130,14 @@ pub enum Toi {
     Separated,
     /// The shapes already overlap at time 0.
     Overlapping,
+    /// The work budget ran out (module docs, certified search): the shapes do not touch
+    /// in `[0, time]`, but whether they touch in `(time, t_max]` is not known. A caller
+    /// that must not tunnel treats it as a hit at `time` (a conservative stop short of
+    /// contact); the gap at `time` is positive but may exceed the tolerance.
+    Unresolved {
+        /// Last time (s) up to which the shapes are certainly apart, in `[0, t_max]`.
+        time: f32,
+    },
 }
 
 /// When `a` and `b`, moving as `motion_a` and `motion_b`, first come within `tolerance`
@@ -123,10 +151,12 @@ pub enum Toi {
 ///   tolerance to contact within one `f32` ulp of time, the last time above it.)
 /// - [`Toi::Separated`]: the shapes do not touch in `[0, t_max]`; they may still come
 ///   closer than `tolerance` without touching.
+/// - [`Toi::Unresolved`]: the work budget ran out; no contact before `time`, the rest is
+///   unknown (a long grazing pass under a loose closing-speed bound, module docs).
 ///
-/// The work is bounded: at most `1 + MAX_TOI_ITERATIONS + TOI_MARCH_STEPS + 1 +
-/// MAX_TOI_BISECTIONS` = 122 GJK calls; a head-on approach takes 2 or 3. See the module
-/// docs for the method and its one blind spot (the fallback march).
+/// The work is bounded: at most `1 + MAX_TOI_ITERATIONS + TOI_SEARCH_SAMPLES +
+/// MAX_TOI_BISECTIONS` = 345 GJK calls; a head-on approach takes 2 or 3. See the module
+/// docs for the method.
 ///
 /// Fails on an invalid pose, a non-finite velocity, a non-positive or non-finite `t_max`
 /// or `tolerance`.
@@ -194,7 +224,7 @@ pub(crate) fn time_of_impact_unchecked(
         }
         safe = s;
     }
-    pair.march(safe, t_max, tolerance)
+    pair.search(safe, t_max, tolerance)
 }
 
 /// A GJK answer at one time, in the world frame.
@@ -243,8 +273,8 @@ impl<'q, 's> MovingPair<'q, 's> {
             motion_a,
             b,
             motion_b,
-            reach_a: core_reach(a),
-            reach_b: core_reach(b),
+            reach_a: spin_reach(a, motion_a),
+            reach_b: spin_reach(b, motion_b),
             cache: SimplexCache::default(),
         }
     }
@@ -272,31 +302,86 @@ impl<'q, 's> MovingPair<'q, 's> {
             + across(self.motion_b.angular, normal) * self.reach_b
     }
 
-    /// The fallback after the advancement budget: march from `safe` to `t_max`, each step
-    /// the longer of the certified advance and `(t_max − safe.time) / TOI_MARCH_STEPS`.
-    fn march(&mut self, safe: Sample, t_max: f32, tolerance: f32) -> Toi {
-        let min_step = (t_max - safe.time) * (1.0 / TOI_MARCH_STEPS as f32);
-        let target = 0.5 * tolerance;
-        let mut prev = safe;
-        // Every step covers at least `min_step`, so TOI_MARCH_STEPS steps reach `t_max`;
-        // one more absorbs rounding of the sum.
-        for _ in 0..=TOI_MARCH_STEPS {
-            if prev.time >= t_max {
-                return Toi::Separated;
-            }
-            let speed = self.closing_speed_bound(prev.normal);
-            if !closing(speed) {
-                return Toi::Separated;
-            }
-            let advance = (prev.distance - target) / speed;
-            let t = scalar::min(prev.time + scalar::max(min_step, advance), t_max);
-            let s = self.sample(t);
-            if !apart(s.distance - tolerance) {
-                return self.bisect_crossing(prev, s, tolerance);
-            }
-            prev = s;
+    /// `μ' = (v_b − v_a)·n + |ω_a⊥| ρ_a + |ω_b⊥| ρ_b` (m/s): no point pair opened the gap
+    /// along `n` faster than this before the sample (module docs, certified search).
+    fn opening_speed_bound(&self, normal: Vec3) -> f32 {
+        (self.motion_b.linear - self.motion_a.linear).dot(normal)
+            + across(self.motion_a.angular, normal) * self.reach_a
+            + across(self.motion_b.angular, normal) * self.reach_b
+    }
+
+    /// The fallback after the advancement budget: the certified search of `(safe.time,
+    /// t_max]` (module docs). `safe` is apart by more than the tolerance, with no contact
+    /// before it.
+    fn search(&mut self, safe: Sample, t_max: f32, tolerance: f32) -> Toi {
+        let mut ends: heapless::Vec<Sample, TOI_SEARCH_DEPTH> = heapless::Vec::new();
+        let mut lo = safe;
+        if lo.time >= t_max {
+            return Toi::Separated;
         }
-        Toi::Separated
+        // The first sample cannot fail to fit: the stack is empty.
+        if ends.push(self.sample(t_max)).is_err() {
+            return Toi::Unresolved { time: lo.time };
+        }
+        for _ in 0..TOI_SEARCH_SAMPLES {
+            let Some(&hi) = ends.last() else {
+                return Toi::Separated;
+            };
+            match self.uncertain_window(&lo, &hi, tolerance) {
+                None if hi.distance > tolerance => {
+                    // Certified and still far: the interval is cleared.
+                    lo = hi;
+                    ends.pop();
+                }
+                None => return self.bisect_crossing(lo, hi, tolerance),
+                Some(t) => {
+                    let s = self.sample(t);
+                    if ends.push(s).is_err() {
+                        break;
+                    }
+                }
+            }
+        }
+        Toi::Unresolved { time: lo.time }
+    }
+
+    /// Where to sample inside `[lo.time, hi.time]`, or `None` when the two samples
+    /// certify the gap above `c = ½ min(tolerance, hi's gap)` on the whole interval, or
+    /// when no time lies strictly between them.
+    ///
+    /// `lo` is apart by more than the tolerance. Certified when `u₀ >= u₁` (module docs);
+    /// else the middle of `[u₀, u₁] ∩ [lo.time, hi.time]`. A contact at `hi` (gap 0, so
+    /// `c = 0` and `u₁ = t₁`) is never certified: the window then shrinks by halves
+    /// towards the crossing.
+    fn uncertain_window(&self, lo: &Sample, hi: &Sample, tolerance: f32) -> Option<f32> {
+        let level = 0.5 * scalar::min(tolerance, scalar::max(hi.distance, 0.0));
+        let (t0, t1) = (lo.time, hi.time);
+        let speed_0 = self.closing_speed_bound(lo.normal);
+        let speed_1 = self.opening_speed_bound(hi.normal);
+        let u0 = if closing(speed_0) {
+            t0 + (lo.distance - level) / speed_0
+        } else {
+            t1
+        };
+        let u1 = if closing(speed_1) && level > 0.0 {
+            t1 - (hi.distance - level) / speed_1
+        } else if level > 0.0 {
+            t0
+        } else {
+            t1
+        };
+        if u0 >= u1 && level > 0.0 {
+            return None;
+        }
+        let (w0, w1) = (scalar::max(u0, t0), scalar::min(u1, t1));
+        let mid = 0.5 * (w0 + w1);
+        let t = if mid > t0 && mid < t1 {
+            mid
+        } else {
+            0.5 * (t0 + t1)
+        };
+        // NaN fails both compares: an unusable bound splits in the middle or stops.
+        (t > t0 && t < t1).then_some(t)
     }
 
     /// Bisection on the sign of `distance − tolerance` between `lo` (gap above the
@@ -348,6 +433,38 @@ fn closing(speed: f32) -> bool {
 /// is rotation invariant, so a sphere has reach 0.
 fn core_reach(shape: &Shape) -> f32 {
     scalar::max(shape.bounding_radius() - shape.radius(), 0.0)
+}
+
+/// `ρ`: the largest distance of a core point from the spin axis through the shape's local
+/// origin (m), for the closing-speed bound (module docs); at most [`core_reach`].
+///
+/// A core point at `r` from the origin moves along a unit normal `n` at
+/// `n·(ω × r) <= |n × ω| |r⊥|`, with `r⊥` its part across the axis `ω̂` (`ω × r` is
+/// across `ω` and has length `|ω| |r⊥|`). The integrator turns the shape about the fixed
+/// world axis `ω̂`, so that axis stays put in the shape's frame (`R(τ)ᵀ ω̂ = R₀ᵀ ω̂`) and
+/// `|r⊥|` does not change with time. A convex function peaks at a vertex: the largest
+/// `|r⊥|` over the core is over its vertices. A wheel spinning on its axle, a rod about
+/// its length, a capsule about its axis get the small reach of their cross-section
+/// instead of their length. A slack of `1e-6` of the reach covers rounding of the axis.
+fn spin_reach(shape: &Shape, motion: &Motion) -> f32 {
+    let reach = core_reach(shape);
+    let spin = motion.angular.length();
+    let Some(count) = shape.core_vertex_count() else {
+        return reach;
+    };
+    if !(spin > 0.0) {
+        return reach;
+    }
+    let axis = motion
+        .pose
+        .rotation
+        .inverse_rotate(motion.angular * (1.0 / spin));
+    let mut across_axis = 0.0f32;
+    for i in 0..count {
+        let r = shape.core_vertex(i);
+        across_axis = scalar::max(across_axis, (r - axis * r.dot(axis)).length_squared());
+    }
+    scalar::min(reach, scalar::sqrt(across_axis) + BOUNDS_ROUNDING * reach)
 }
 
 /// The box that holds `shape` over `dt` seconds of `motion`: its box at the start unioned

@@ -45,6 +45,10 @@
 //!   "the earliest hit", after Box2D v3's `b2ContinuousQueryCallback`, which also
 //!   refuses hits that do not threaten to tunnel.
 //!
+//! - A sweep whose work budget ran out ([`Toi::Unresolved`]: a long grazing pass under a
+//!   loose spin bound) counts as a hit at the last time it certified: the body stops
+//!   short rather than risk tunnelling.
+//!
 //! A body moved back as the partner of an earlier fast body is swept again in its own
 //! turn, from `pose0` to where it now is; that sweep finds the contact at the end of its
 //! motion or nothing, and counts as one more sweep.
@@ -234,17 +238,24 @@ fn earliest_hit<const N: usize>(
         let other_motion = motion_of(o, h);
         let toi =
             time_of_impact_unchecked(&fast.shape, motion, &o.shape, &other_motion, h, tolerance);
-        let Toi::Hit { time, normal, .. } = toi else {
-            continue;
+        let (time, normal) = match toi {
+            Toi::Hit { time, normal, .. } => (time, Some(normal)),
+            // The sweep's budget ran out before it could clear the rest of the step:
+            // stop at the last time it is sure of (module docs, conservative).
+            Toi::Unresolved { time } => (time, None),
+            Toi::Separated | Toi::Overlapping => continue,
         };
         if time <= 0.0 || best.is_some_and(|(t, _)| time >= t) {
             continue;
         }
         // How much deeper the rest of the motion would take the bodies along the normal.
-        let closing = (motion.linear - other_motion.linear).dot(normal)
-            + motion.angular.length() * core_reach(&fast.shape)
-            + other_motion.angular.length() * core_reach(&o.shape);
-        if closing * (h - time) > cfg.slop {
+        let deeper = normal.is_none_or(|n| {
+            let closing = (motion.linear - other_motion.linear).dot(n)
+                + motion.angular.length() * core_reach(&fast.shape)
+                + other_motion.angular.length() * core_reach(&o.shape);
+            closing * (h - time) > cfg.slop
+        });
+        if deeper {
             best = Some((time, other));
         }
     }

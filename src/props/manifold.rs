@@ -249,12 +249,22 @@ fn true_separation(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Option<f
     }
 }
 
-/// True when EPA converged on an overlapping pair (its depth is then exact, not a bound).
-fn epa_converged(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> bool {
-    matches!(
-        penetration(a, pose_a, b, pose_b),
-        Ok(Some(p)) if p.status == EpaStatus::Converged
-    )
+/// EPA's depth bound (m) when it stopped at a bound on an overlapping pair in either
+/// order (the deeper of the two when both did), `None` when both orders converged. The
+/// manifold runs in one canonical order whatever the argument order, so a bound in the
+/// other order is the one it may have met (fuzz finding
+/// `capsule-core-touching-a-hull-549aad0e`: the capsule first converges to 7.890 m, the
+/// hull first, the manifold's order, only bounds it at 8.163 m).
+fn epa_bound(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Option<f32> {
+    let bound = |x: &Shape, px: &Iso, y: &Shape, py: &Iso| match penetration(x, px, y, py) {
+        Ok(Some(p)) if p.status != EpaStatus::Converged => Some(p.depth),
+        _ => None,
+    };
+    match (bound(a, pose_a, b, pose_b), bound(b, pose_b, a, pose_a)) {
+        (Some(x), Some(y)) => Some(scalar::max(x, y)),
+        (x, None) => x,
+        (None, y) => y,
+    }
 }
 
 fn agree_slack(scale: f32, s: f32) -> f32 {
@@ -303,13 +313,19 @@ fn agrees_with_gjk_epa(
         return Ok(());
     };
     let slack = agree_slack(scale, s);
-    if s < 0.0 && !epa_converged(a, pose_a, b, pose_b) {
-        // EPA stopped at a bound (a Minkowski difference too thin to expand, or its caps):
-        // its depth is only an upper bound, so the manifold may be shallower, never
-        // deeper (fuzz finding `bounded-capsule-hull-02612b2b`: a capsule whose core just
-        // touches a hull, 7.890 m deep by the manifold, bounded at 8.175 m by EPA).
+    let bound = if s < 0.0 {
+        epa_bound(a, pose_a, b, pose_b)
+    } else {
+        None
+    };
+    if let Some(bound) = bound {
+        // EPA stopped at a bound in one order (a Minkowski difference too thin to expand,
+        // or its caps): that depth is only an upper bound, and the manifold may stand on
+        // it, never deeper (fuzz findings `bounded-capsule-hull-02612b2b`, a capsule whose
+        // core just touches a hull, 7.890 m deep by the manifold, bounded at 8.175 m by
+        // EPA; and `capsule-core-touching-a-hull-549aad0e`, the bound in the other order).
         return check(
-            m.min_separation() >= s - slack,
+            m.min_separation() >= scalar::min(s, -bound) - slack,
             "manifold: deeper than EPA's bound",
         );
     }

@@ -521,14 +521,7 @@ pub fn core_vertices(shape: &Shape, pose: &Iso) -> Option<CoreVertices> {
         vertices: [Vec3::ZERO; MAX_HULL_VERTICES],
         len: 0,
     };
-    let count = match shape {
-        Shape::HalfSpace(_) => return None,
-        Shape::Sphere(_) => 1,
-        Shape::Capsule(_) => 2,
-        Shape::Cuboid(_) => 8,
-        Shape::Hull(h) => h.vertices().len(),
-        Shape::Triangle(_) => 3,
-    };
+    let count = shape.core_vertex_count()? as usize;
     for i in 0..count.min(MAX_HULL_VERTICES) {
         out.push(pose.transform_point(shape.core_vertex(i as u32)));
     }

@@ -22,11 +22,6 @@ pub const TOI_BOUNDS_SAMPLES: u32 = 100;
 /// below; only "no panic, time in range" is checked there.
 const WORKING_RANGE: f32 = 1.0e3;
 
-/// Most rotation (rad) of the two shapes together over `[0, t_max]` for which "no contact
-/// is missed" is checked: one turn. Time of impact's fallback march is measured to miss
-/// nothing up to about 20 rad (see `collide::toi`), so this leaves a margin of 3.
-const TURN_LIMIT: f32 = core::f32::consts::TAU;
-
 /// GJK's touching resolution, relative to the size of the numbers it works with, as the
 /// gap checks assume it: cores closer than this may count as touching (distance 0). A
 /// conservative bound: GJK's own threshold (`collide::gjk::GJK_OVERLAP_TOLERANCE`, which
@@ -60,10 +55,10 @@ const UNIT_SLACK: f32 = 1.0e-3;
 ///   the hit time (or touching within rounding: EPA depth within the GJK slack) with a gap
 ///   of at most `tolerance` (plus GJK slack); `Overlapping` means GJK distance 0 at time 0
 ///   (within the same slack);
-/// - when moreover the two shapes turn at most one turn in total over `[0, t_max]`: no
-///   contact is missed: [`TOI_EARLIER_SAMPLES`] times before a hit (apart or touching
-///   within rounding), or [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after
-///   `Separated`, show the shapes apart.
+/// - and there, at any spin, no contact is missed: [`TOI_EARLIER_SAMPLES`] times before a
+///   hit or before an `Unresolved` answer's time (apart or touching within rounding), or
+///   [`TOI_SEPARATED_SAMPLES`] times in `[0, t_max]` after `Separated`, show the shapes
+///   apart. (Until the certified search, this held only up to one turn in all.)
 pub fn toi_properties(
     a: &Shape,
     motion_a: &Motion,
@@ -75,7 +70,7 @@ pub fn toi_properties(
     let Ok(toi) = time_of_impact(a, motion_a, b, motion_b, t_max, tolerance) else {
         return Ok(());
     };
-    if let Toi::Hit { time, .. } = toi {
+    if let Toi::Hit { time, .. } | Toi::Unresolved { time } = toi {
         check(
             (0.0..=t_max).contains(&time),
             "toi: hit time outside [0, t_max]",
@@ -105,8 +100,6 @@ pub fn toi_properties(
     if !resolvable(a, motion_a, b, motion_b, t_max, tolerance) {
         return Ok(());
     }
-    let turn = (motion_a.angular.length() + motion_b.angular.length()) * t_max;
-    let spin_in_range = turn <= TURN_LIMIT;
     let pair = Sampler {
         a,
         motion_a,
@@ -138,21 +131,18 @@ pub fn toi_properties(
                 point_a.distance(point_b) <= tolerance + slack,
                 "toi: hit points further apart than the tolerance",
             )?;
-            if !spin_in_range {
-                return Ok(());
-            }
-            for k in 0..TOI_EARLIER_SAMPLES {
-                let t = time * (k as f32 / TOI_EARLIER_SAMPLES as f32);
-                check(
-                    pair.gap_at(t)? > 0.0 || pair.depth_at(t)? <= slack,
-                    "toi: shapes overlap before the hit (tunnelling)",
-                )?;
-            }
+            pair.apart_before(time, slack)?;
+        }
+        Toi::Unresolved { time } => {
+            // Nothing is claimed after `time`; up to it the shapes are apart.
+            let slack = GAP_SLACK * (1.0 + pair.scale(t_max));
+            check(
+                pair.gap_at(time)? > 0.0 || pair.depth_at(time)? <= slack,
+                "toi: unresolved, but the shapes overlap at its certain time",
+            )?;
+            pair.apart_before(time, slack)?;
         }
         Toi::Separated => {
-            if !spin_in_range {
-                return Ok(());
-            }
             for k in 0..=TOI_SEPARATED_SAMPLES {
                 let t = t_max * (k as f32 / TOI_SEPARATED_SAMPLES as f32);
                 check(
@@ -206,6 +196,19 @@ impl Sampler<'_, '_> {
         distance(self.a, &pose_a, self.b, &pose_b, &mut cache)
             .map(|out| out.distance)
             .map_err(|_| Violation("toi: distance refused a pose from Motion::pose_at"))
+    }
+
+    /// The shapes are apart (or touching within `slack`) at [`TOI_EARLIER_SAMPLES`] times
+    /// in `[0, time)`: nothing tunnelled before a reported time.
+    fn apart_before(&self, time: f32, slack: f32) -> Result<(), Violation> {
+        for k in 0..TOI_EARLIER_SAMPLES {
+            let t = time * (k as f32 / TOI_EARLIER_SAMPLES as f32);
+            check(
+                self.gap_at(t)? > 0.0 || self.depth_at(t)? <= slack,
+                "toi: shapes overlap before the hit (tunnelling)",
+            )?;
+        }
+        Ok(())
     }
 
     /// EPA's penetration depth at time `t` (0 when the shapes do not overlap).

@@ -329,6 +329,20 @@ impl<'a> Shape<'a> {
         }
     }
 
+    /// How many core vertices [`Shape::core_vertex`] numbers (the core is their convex
+    /// hull): 1 for a sphere (its centre), 2 for a capsule, 8 for a box, a hull's vertex
+    /// count, 3 for a triangle; `None` for a half-space, which has no finite core.
+    pub fn core_vertex_count(&self) -> Option<u32> {
+        match self {
+            Shape::Sphere(_) => Some(1),
+            Shape::Capsule(_) => Some(2),
+            Shape::Cuboid(_) => Some(8),
+            Shape::Hull(h) => Some(h.vertices().len() as u32),
+            Shape::HalfSpace(_) => None,
+            Shape::Triangle(_) => Some(3),
+        }
+    }
+
     /// The furthest surface point along `dir` (local frame): core support plus radius.
     pub fn support(&self, dir: Vec3) -> Vec3 {
         let (p, _) = self.core_support(dir);

@@ -1,0 +1,52 @@
+//! Print a fuzz input as the values the target sees, to turn a finding into a test.
+//!
+//! Usage: `cargo run --manifest-path fuzz/Cargo.toml --example show -- TARGET FILE`
+//! (TARGET: `narrow_phase` or `toi`).
+use arbitrary::{Arbitrary, Unstructured};
+use carom::shape::Shape;
+use carom_fuzz::{PairInput, ToiInput, TIME_UNIT, TOLERANCE_UNIT};
+
+fn describe(s: &Shape) -> String {
+    match s {
+        Shape::Hull(h) => format!("hull {:?}", h.vertices()),
+        other => format!("{other:?}"),
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let (Some(target), Some(file)) = (args.get(1), args.get(2)) else {
+        eprintln!("usage: show TARGET FILE");
+        std::process::exit(2);
+    };
+    let bytes = std::fs::read(file).expect("read the input");
+    let u = Unstructured::new(&bytes);
+    match target.as_str() {
+        "toi" => {
+            let input = ToiInput::arbitrary_take_rest(u).expect("decode");
+            let (Some(a), Some(b)) = (input.a.build(), input.b.build()) else {
+                println!("a shape is refused");
+                return;
+            };
+            println!("a: {}", describe(&a.shape()));
+            println!("b: {}", describe(&b.shape()));
+            println!("motion_a: {:?}", input.motion_a.motion());
+            println!("motion_b: {:?}", input.motion_b.motion());
+            println!("t_max: {:?}", input.t_max.value(TIME_UNIT));
+            println!("tolerance: {:?}", input.tolerance.value(TOLERANCE_UNIT));
+        }
+        "narrow_phase" => {
+            let input = PairInput::arbitrary_take_rest(u).expect("decode");
+            let (Some(a), Some(b)) = (input.a.build(), input.b.build()) else {
+                println!("a shape is refused");
+                return;
+            };
+            println!("a: {}", describe(&a.shape()));
+            println!("b: {}", describe(&b.shape()));
+            println!("pose_a: {:?}", input.pose_a.iso());
+            println!("pose_b: {:?}", input.pose_b.iso());
+            println!("margin: {:?}", input.margin.value(TOLERANCE_UNIT));
+        }
+        _ => eprintln!("unknown target {target}"),
+    }
+}
