@@ -106,6 +106,11 @@ pub struct Manifold {
     pub len: u8,
     /// The points; the first `len` are used.
     pub points: [ManifoldPoint; MAX_MANIFOLD_POINTS],
+    /// True when the deepest separation stands on an upper bound of the penetration depth,
+    /// not on the exact minimal one: EPA stopped at a bound (a Minkowski difference too
+    /// thin to expand, such as a core just touching a nearly flat hull, or its caps; see
+    /// [`EpaStatus`](super::EpaStatus)). The bound is never shallower than the exact depth.
+    pub depth_bound: bool,
 }
 
 impl Manifold {
@@ -224,6 +229,8 @@ pub(crate) struct LocalManifold {
     pub len: usize,
     /// The points; the first `len` are used.
     pub points: [Candidate; MAX_MANIFOLD_POINTS],
+    /// The depth is EPA's bound, not exact ([`Manifold::depth_bound`]).
+    pub depth_bound: bool,
 }
 
 impl LocalManifold {
@@ -233,6 +240,7 @@ impl LocalManifold {
             normal,
             len: 0,
             points: [Candidate::default(); MAX_MANIFOLD_POINTS],
+            depth_bound: false,
         }
     }
 
@@ -340,6 +348,7 @@ fn dispatch(
     route: Route,
     out: &mut Manifold,
 ) -> bool {
+    out.depth_bound = false;
     let (rank_a, rank_b) = (order_rank(a), order_rank(b));
     let swap = rank_b < rank_a
         || (rank_a == 3 && rank_b == 3 && polytope_order(b, pose_b, a, pose_a) == Ordering::Less);
@@ -605,6 +614,7 @@ fn to_world(
         return false;
     };
     m.normal = normal;
+    m.depth_bound = local.depth_bound;
     // Rotation matrices: a manifold moves up to 12 points and vectors.
     let ra = sat::rotation_matrix(pose_a.rotation);
     let rb = sat::rotation_matrix(b_in_a.rotation);
@@ -661,6 +671,8 @@ struct Axis {
     separation: f32,
     point_a: Vec3,
     point_b: Vec3,
+    /// The separation is EPA's bound on the depth, not exact.
+    bounded: bool,
 }
 
 /// GJK on the cores; when they are further apart than `margin`, `None`; when the full
@@ -698,6 +710,7 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
                     separation: (d.point_b - d.point_a).dot(normal),
                     point_a: d.point_a,
                     point_b: d.point_b,
+                    bounded: false,
                 });
             }
         }
@@ -707,6 +720,7 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
             separation: d.distance,
             point_a: d.point_a,
             point_b: d.point_b,
+            bounded: false,
         });
     }
     match epa::penetration_from_gjk(&pa, &pb, &core, epa::EpaCaps::DEFAULT) {
@@ -717,6 +731,7 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
                 separation: -p.depth,
                 point_a: p.point_a,
                 point_b: p.point_b,
+                bounded: p.status != epa::EpaStatus::Converged,
             })
         }
         None => {
@@ -727,6 +742,7 @@ fn find_axis(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<Axis> {
                 separation: 0.0,
                 point_a: d.point_a,
                 point_b: d.point_b,
+                bounded: false,
             })
         }
     }
@@ -785,6 +801,20 @@ fn support_in_a(shape: &Shape, shape_in_a: &Iso, dir: Vec3) -> Vec3 {
 /// Sphere or capsule `a` against polytope `b` (B at `b_in_a`).
 fn round_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<LocalManifold> {
     let axis = find_axis(a, b, b_in_a, margin)?;
+    round_vs_polytope_on(a, b, b_in_a, margin, &axis).map(|m| LocalManifold {
+        depth_bound: axis.bounded,
+        ..m
+    })
+}
+
+/// [`round_vs_polytope`] on the axis found.
+fn round_vs_polytope_on(
+    a: &Shape,
+    b: &Shape,
+    b_in_a: &Iso,
+    margin: f32,
+    axis: &Axis,
+) -> Option<LocalManifold> {
     let face_b = supporting_face_in_a(b, b_in_a, -axis.normal);
     if let Shape::Capsule(c) = a {
         let tol = face_tolerance(a, b, b_in_a);
@@ -859,6 +889,20 @@ fn capsule_on_face(
 /// else one point.
 fn polytope_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<LocalManifold> {
     let axis = find_axis(a, b, b_in_a, margin)?;
+    polytope_vs_polytope_on(a, b, b_in_a, margin, &axis).map(|m| LocalManifold {
+        depth_bound: axis.bounded,
+        ..m
+    })
+}
+
+/// [`polytope_vs_polytope`] on the axis found.
+fn polytope_vs_polytope_on(
+    a: &Shape,
+    b: &Shape,
+    b_in_a: &Iso,
+    margin: f32,
+    axis: &Axis,
+) -> Option<LocalManifold> {
     let face_a = a.supporting_face(axis.normal);
     let face_b = supporting_face_in_a(b, b_in_a, -axis.normal);
     if let Some(m) = face_contact(a, b, b_in_a, &face_a, &face_b, &axis, margin) {

@@ -329,6 +329,16 @@ fn agrees_with_gjk_epa(
             "manifold: deeper than EPA's bound",
         );
     }
+    if m.depth_bound {
+        // The manifold's own EPA (in the f32 relative pose of the pair's canonical order)
+        // stopped at a bound where the public queries (f64 relative pose) converged:
+        // an upper bound on the depth, never shallower than the exact one (fuzz finding
+        // `capsule-core-touching-a-hull-7d7caaf2`).
+        return check(
+            m.min_separation() <= s + slack,
+            "manifold: a bounded depth shallower than the exact one",
+        );
+    }
     // Two overlapping polytopes: a face may stand in for a slightly shallower edge pair.
     let deeper = if is_polytope(a) && is_polytope(b) && s < 0.0 {
         FACE_PREFERENCE_DEPTH * -s
