@@ -7,14 +7,46 @@
 //! the host; every target restores it, finishes the run and must reach the golden `mixed`
 //! checksum (a snapshot crosses targets intact).
 //!
+//! The feature `micromath` gives other bits (its square root and trig differ from libm's
+//! in the last places), so a `micromath` build has its own two files beside them,
+//! `tests/golden/checksums_micromath.txt` and `tests/golden/mixed_500_micromath.snap`,
+//! checked the same way; each backend refuses the other's snapshot.
+//!
 //! To regenerate after an intended change: `CAROM_BLESS=1 cargo test --test determinism`
-//! rewrites both files; say why in the commit message.
+//! rewrites both files of the build's backend (add `--features micromath` for the
+//! micromath pair); say why in the commit message.
 
 use carom::scenes::{self, ReferenceWorld, Scene};
-use carom::{ConvexHull, Vec3};
+use carom::{ConvexHull, Error, SnapshotError, Vec3};
 
+/// The golden lines of this build's math backend.
+#[cfg(not(feature = "micromath"))]
 const GOLDEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/checksums.txt");
+/// The golden lines of this build's math backend.
+#[cfg(feature = "micromath")]
+const GOLDEN: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/golden/checksums_micromath.txt"
+);
+/// The host snapshot of `mixed` at step 500 taken by this build's math backend.
+#[cfg(not(feature = "micromath"))]
 const SNAPSHOT: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/mixed_500.snap");
+/// The host snapshot of `mixed` at step 500 taken by this build's math backend.
+#[cfg(feature = "micromath")]
+const SNAPSHOT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/golden/mixed_500_micromath.snap"
+);
+/// The same snapshot taken by the other math backend.
+#[cfg(not(feature = "micromath"))]
+const OTHER_BACKEND_SNAPSHOT: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/tests/golden/mixed_500_micromath.snap"
+);
+/// The same snapshot taken by the other math backend.
+#[cfg(feature = "micromath")]
+const OTHER_BACKEND_SNAPSHOT: &str =
+    concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden/mixed_500.snap");
 
 fn reference_hulls() -> Vec<ConvexHull> {
     let tetra = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
@@ -137,4 +169,26 @@ fn golden_lines_have_the_documented_format() {
 fn a_scene_run_twice_gives_the_same_checksum() {
     let (a, b) = run_on_big_stack(|| (reference_line(Scene::Tower), reference_line(Scene::Tower)));
     assert_eq!(a, b);
+}
+
+#[test]
+fn the_other_math_backends_snapshot_is_refused_and_changes_nothing() {
+    let other = std::fs::read(OTHER_BACKEND_SNAPSHOT).unwrap();
+    let (refused, unchanged) = run_on_big_stack(move || {
+        let hulls = reference_hulls();
+        let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
+        world.set_config(Scene::Mixed.config()).unwrap();
+        Scene::Mixed.build(&mut world, &hulls).unwrap();
+        for _ in 0..10 {
+            world.step();
+        }
+        let before = world.checksum();
+        let refused = world.restore_with_hulls(&other, &hulls);
+        (
+            refused,
+            world.checksum() == before && world.step_count() == 10,
+        )
+    });
+    assert_eq!(refused, Err(Error::Snapshot(SnapshotError::MathBackend)));
+    assert!(unchanged);
 }

@@ -25,6 +25,16 @@ use carom::shape::{ConvexHull, Shape};
 const TOL: f32 = 1.0e-4;
 /// Normal tolerance (length of the difference of two unit vectors).
 const NORMAL_TOL: f32 = 1.0e-3;
+/// Separation-vector tolerance (m) against the oracle. GJK stops on a relative 1e-6 of
+/// the distance, which leaves the direction free by up to √(2e-6) rad where the closest
+/// features are nearly parallel: the worst of the 1000 hull pairs below is 1.4e-4 m with
+/// libm and 3.2e-4 m with `micromath` (whose approximate trig gives `SplitMix64::rotation`
+/// other random poses, one of them such a near-parallel pair), every other pair under 3e-6.
+const GAP_TOL: f32 = if cfg!(feature = "micromath") {
+    4.0 * TOL
+} else {
+    3.0 * TOL
+};
 
 fn random_pose(rng: &mut SplitMix64, reach: f32) -> Iso {
     Iso::new(rng.unit_vector() * rng.range(0.0, reach), rng.rotation())
@@ -63,7 +73,7 @@ fn oracle_error(a: &Shape, pa: &Iso, b: &Shape, pb: &Iso) -> f32 {
         // The separation vector of two convex sets is unique: compare it.
         let dir = (o.point_b - o.point_a).normalize_or(Vec3::Y);
         let gap = out.normal * out.distance - dir * expected;
-        assert!(gap.length() < 3.0 * TOL, "{gap:?} {out:?} {o:?}");
+        assert!(gap.length() < GAP_TOL, "{gap:?} {out:?} {o:?}");
         let v = out.point_b - out.point_a;
         assert!((v.length() - out.distance).abs() < TOL, "{out:?}");
     }
