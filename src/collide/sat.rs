@@ -246,6 +246,14 @@ pub(crate) trait Polytope {
     fn plane(&self, f: usize) -> (Vec3, f32);
     /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
     fn min_dot(&self, dir: Vec3) -> f32;
+    /// `out[f] = n_f · v` for every face normal `n_f` that fits in `out`: the products of
+    /// [`Polytope::plane`]'s normals, bit for bit.
+    #[inline]
+    fn normal_dots(&self, v: Vec3, out: &mut [f32]) {
+        for (f, d) in out.iter_mut().enumerate().take(self.face_count()) {
+            *d = self.plane(f).0.dot(v);
+        }
+    }
     /// Number of edges.
     fn edge_count(&self) -> usize;
     /// Edge `e`, `None` past the last.
@@ -430,6 +438,15 @@ impl Polytope for ConvexHull {
     #[inline]
     fn min_dot(&self, dir: Vec3) -> f32 {
         ConvexHull::min_dot(self, dir)
+    }
+
+    #[inline]
+    fn normal_dots(&self, v: Vec3, out: &mut [f32]) {
+        // The normals in place: no per-face range check (see `ConvexHull::plane`).
+        let normals = self.normals.get(..self.face_count()).unwrap_or(&[]);
+        for (d, n) in out.iter_mut().zip(normals) {
+            *d = n.dot(v);
+        }
     }
 
     fn edge_count(&self) -> usize {
@@ -672,6 +689,19 @@ fn edge_pair(
     fr: &Frame,
     centers: (Vec3, Vec3),
 ) -> Option<(Vec3, f32)> {
+    edge_pair_placed(arc, e_b, (fr.point(p0_b), fr.vector(e_b)), (cba, dba), centers)
+}
+
+/// [`edge_pair`] with B's edge also given in A's frame (`placed`: start and vector), as
+/// [`query`] computes it once per edge: the same operations, so the same answer.
+#[inline]
+fn edge_pair_placed(
+    arc: &ArcA,
+    e_b: Vec3,
+    placed: (Vec3, Vec3),
+    (cba, dba): (f32, f32),
+    centers: (Vec3, Vec3),
+) -> Option<(Vec3, f32)> {
     if !is_minkowski_face(arc, cba, dba, e_b) {
         return None;
     }
@@ -679,10 +709,23 @@ fn edge_pair(
         arc.edge.p0,
         arc.vector,
         centers.0,
-        fr.point(p0_b),
-        fr.vector(e_b),
+        placed.0,
+        placed.1,
         centers.1,
     )
+}
+
+/// One of B's edges as [`query`] uses it.
+#[derive(Clone, Copy, Debug)]
+struct EdgeB {
+    /// Edge index in B.
+    index: u8,
+    /// `p1 − p0`, B's frame.
+    vector: Vec3,
+    /// `p0` and `p1 − p0` in A's frame.
+    placed: (Vec3, Vec3),
+    /// The faces on either side.
+    faces: (u8, u8),
 }
 
 /// The full test: `Err(axis)` when `axis` separates the shapes by more than `margin`, else
@@ -730,15 +773,20 @@ fn query<A: Polytope, B: Polytope>(
     }
     let centers = (a.center(), fr.point(b.center()));
     let mut edge: Option<EdgeBest> = None;
-    // B's edges once: start, vector and faces (B's frame).
-    // (index, start, vector, face along, face against).
-    let mut edges_b: heapless::Vec<(u8, Vec3, Vec3, u8, u8), MAX_HULL_EDGES> = heapless::Vec::new();
+    // B's edges once: index, vector (B's frame), start and vector in A's frame, faces.
+    let mut edges_b: heapless::Vec<EdgeB, MAX_HULL_EDGES> = heapless::Vec::new();
     for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
         let (Some(e), Some((f0, f1))) = (b.edge(ib), b.edge_faces(ib)) else {
             continue;
         };
+        let vector = e.p1 - e.p0;
         // Cannot be full: at most MAX_HULL_EDGES edges.
-        let _ = edges_b.push((ib as u8, e.p0, e.p1 - e.p0, f0 as u8, f1 as u8));
+        let _ = edges_b.push(EdgeB {
+            index: ib as u8,
+            vector,
+            placed: (fr.point(e.p0), fr.vector(vector)),
+            faces: (f0 as u8, f1 as u8),
+        });
     }
     // B's face normals dotted with the current A edge (B's frame): the first triple
     // product of every B edge is a look-up, and most pairs stop there. The pairs that
@@ -749,15 +797,13 @@ fn query<A: Polytope, B: Polytope>(
     let mut passing = [0u8; 256];
     let mut pairs_b = [(0u8, 0u8); MAX_HULL_EDGES];
     for (slot, e) in pairs_b.iter_mut().zip(edges_b.iter()) {
-        *slot = (e.3, e.4);
+        *slot = e.faces;
     }
     let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
     for ia in 0..a.edge_count() {
         let Some(ea) = a.edge(ia) else { continue };
         let arc = ArcA::new(ea, fr);
-        for (g, d) in dots.iter_mut().enumerate().take(faces_b) {
-            *d = b.plane(g).0.dot(arc.vector_b);
-        }
+        b.normal_dots(arc.vector_b, dots.get_mut(..faces_b).unwrap_or(&mut []));
         let mut count = 0usize;
         for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
             let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
@@ -769,14 +815,14 @@ fn query<A: Polytope, B: Polytope>(
             count += straddles as usize;
         }
         for &k in passing.iter().take(count) {
-            let Some(&(ib, p0_b, e_b, f0, f1)) = edges_b.get(k as usize) else {
+            let Some(eb) = edges_b.get(k as usize) else {
                 continue;
             };
-            let ib = ib as usize;
-            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
-            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
-            let Some((normal, s_edges)) = edge_pair(&arc, (p0_b, e_b), (cba, dba), fr, centers)
-            else {
+            let ib = eb.index as usize;
+            let cba = dots.get(eb.faces.0 as usize).copied().unwrap_or(0.0);
+            let dba = dots.get(eb.faces.1 as usize).copied().unwrap_or(0.0);
+            let pair = edge_pair_placed(&arc, eb.vector, eb.placed, (cba, dba), centers);
+            let Some((normal, s_edges)) = pair else {
                 continue;
             };
             // Only a pair that would end the test or become the best one is measured

@@ -78,7 +78,7 @@ pub(crate) struct SolverBody {
 }
 
 impl SolverBody {
-    const ZERO: SolverBody = SolverBody {
+    pub(crate) const ZERO: SolverBody = SolverBody {
         v: Vec3::ZERO,
         w: Vec3::ZERO,
         dp: Vec3::ZERO,

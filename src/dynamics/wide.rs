@@ -514,65 +514,54 @@ struct Bodies4 {
     rot: M4,
 }
 
+/// What a lane without a solver body reads: at rest, identity rotation, infinite mass.
+const AT_REST: SolverBody = SolverBody::ZERO;
+
+/// The four solver bodies of `idx`, [`AT_REST`] for [`NONE`] (or any index out of range).
+#[inline]
+fn four<'b>(bodies: &'b [SolverBody], idx: &[u32; 4]) -> [&'b SolverBody; 4] {
+    let at = |i: u32| bodies.get(i as usize).unwrap_or(&AT_REST);
+    [at(idx[0]), at(idx[1]), at(idx[2]), at(idx[3])]
+}
+
+/// `f(body)` of four bodies as lanes.
+#[inline]
+fn lanes3(b: &[&SolverBody; 4], f: impl Fn(&SolverBody) -> Vec3) -> V4 {
+    let [p, q, r, s] = [f(b[0]), f(b[1]), f(b[2]), f(b[3])];
+    V4 {
+        x: F4([p.x, q.x, r.x, s.x]),
+        y: F4([p.y, q.y, r.y, s.y]),
+        z: F4([p.z, q.z, r.z, s.z]),
+    }
+}
+
 impl Bodies4 {
+    /// Velocities, displacements and rotation matrices of four solver bodies.
+    #[inline]
     fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
-        // Plain arrays first, lanes second: the loads stay contiguous per body.
-        let mut f = [[0.0f32; 4]; 18];
-        for (l, i) in idx.iter().enumerate() {
-            let Some(b) = bodies.get(*i as usize) else {
-                // No solver body: at rest, identity rotation.
-                for (r, d) in [(9usize, 0usize), (13, 1), (17, 2)] {
-                    let _ = d;
-                    if let Some(x) = f.get_mut(r).and_then(|c| c.get_mut(l)) {
-                        *x = 1.0;
-                    }
-                }
-                continue;
-            };
-            let m = &b.rot;
-            let vals = [
-                b.v.x, b.v.y, b.v.z, b.w.x, b.w.y, b.w.z, b.dp.x, b.dp.y, b.dp.z, m.x.x, m.x.y,
-                m.x.z, m.y.x, m.y.y, m.y.z, m.z.x, m.z.y, m.z.z,
-            ];
-            for (row, v) in f.iter_mut().zip(vals) {
-                if let Some(x) = row.get_mut(l) {
-                    *x = v;
-                }
-            }
-        }
-        let v3 = |i: usize| V4 {
-            x: F4(f.get(i).copied().unwrap_or_default()),
-            y: F4(f.get(i + 1).copied().unwrap_or_default()),
-            z: F4(f.get(i + 2).copied().unwrap_or_default()),
-        };
+        let b = four(bodies, idx);
         Bodies4 {
-            v: v3(0),
-            w: v3(3),
-            dp: v3(6),
+            v: lanes3(&b, |b| b.v),
+            w: lanes3(&b, |b| b.w),
+            dp: lanes3(&b, |b| b.dp),
             rot: M4 {
-                x: v3(9),
-                y: v3(12),
-                z: v3(15),
+                x: lanes3(&b, |b| b.rot.x),
+                y: lanes3(&b, |b| b.rot.y),
+                z: lanes3(&b, |b| b.rot.z),
             },
         }
     }
 
     /// [`Bodies4::gather`] of the velocities only (displacement zero, rotation the
     /// identity): for passes that never read the poses.
+    #[inline]
     fn gather_velocities(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
-        let mut v = V4::default();
-        let mut w = V4::default();
-        for (l, i) in idx.iter().enumerate() {
-            if let Some(b) = bodies.get(*i as usize) {
-                v.set(l, b.v);
-                w.set(l, b.w);
-            }
-        }
+        let b = four(bodies, idx);
         let one = F4::splat(1.0);
         let zero = F4::ZERO;
         Bodies4 {
-            v,
-            w,
+            v: lanes3(&b, |b| b.v),
+            w: lanes3(&b, |b| b.w),
             dp: V4::default(),
             rot: M4 {
                 x: V4 {

@@ -59,6 +59,9 @@ pub struct ConvexHull {
     /// True when the cloud needed more than [`MAX_HULL_VERTICES`] vertices and the hull
     /// keeps the greedy subset described at [`ConvexHull::new`].
     pub(crate) reduced: bool,
+    /// Thinnest width (m), computed once at build ([`ConvexHull::min_extent`]): the
+    /// continuous-collision test asks for it for every body every step.
+    pub(crate) thinnest: f32,
 }
 
 /// One edge of a hull between two faces that are not coplanar: its end vertices
@@ -94,6 +97,7 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     centroid: Vec3::ZERO,
     tolerance: 0.0,
     reduced: false,
+    thinnest: 0.0,
 };
 
 impl ConvexHull {
@@ -378,8 +382,14 @@ impl ConvexHull {
     }
 
     /// Thinnest width: the smallest, over faces, of the largest depth of a vertex below
-    /// that face's plane.
+    /// that face's plane (m). Computed once when the hull is built.
+    #[inline]
     pub(crate) fn min_extent(&self) -> f32 {
+        self.thinnest
+    }
+
+    /// [`ConvexHull::min_extent`] from the faces and vertices (`O(F V)`).
+    fn thinnest_width(&self) -> f32 {
         let mut w = f32::INFINITY;
         for (n, d) in self.planes() {
             let mut deepest = 0.0;
@@ -1350,6 +1360,7 @@ impl<'p> Builder<'p> {
             .volume_integrals()
             .ok_or(Error::Hull(HullError::Coplanar))?;
         hull.centroid = centroid;
+        hull.thinnest = hull.thinnest_width();
         Ok(hull)
     }
 
