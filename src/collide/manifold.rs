@@ -819,7 +819,7 @@ fn round_vs_polytope_on(
     if let Shape::Capsule(c) = a {
         let tol = face_tolerance(a, b, b_in_a);
         let s_face = face_separation(&face_b, |d| a.support(d));
-        if let Some(m) = capsule_on_face(c, &face_b, s_face, &axis, tol, margin) {
+        if let Some(m) = capsule_on_face(c, &face_b, s_face, axis, tol, margin) {
             return Some(m);
         }
     }
@@ -827,7 +827,7 @@ fn round_vs_polytope_on(
         a: round_feature(a, &Iso::IDENTITY, axis.point_a, axis.normal),
         b: clip::closest_feature(&face_b, axis.point_b),
     };
-    single_point(&axis, id, margin)
+    single_point(axis, id, margin)
 }
 
 /// The one-point manifold at the GJK/EPA closest points.
@@ -905,14 +905,14 @@ fn polytope_vs_polytope_on(
 ) -> Option<LocalManifold> {
     let face_a = a.supporting_face(axis.normal);
     let face_b = supporting_face_in_a(b, b_in_a, -axis.normal);
-    if let Some(m) = face_contact(a, b, b_in_a, &face_a, &face_b, &axis, margin) {
+    if let Some(m) = face_contact(a, b, b_in_a, &face_a, &face_b, axis, margin) {
         return Some(m);
     }
     let id = ContactId {
         a: clip::closest_feature(&face_a, axis.point_a),
         b: clip::closest_feature(&face_b, axis.point_b),
     };
-    single_point(&axis, id, margin)
+    single_point(axis, id, margin)
 }
 
 /// The clipped face manifold of two polytopes, or `None` when neither supporting face

@@ -689,7 +689,13 @@ fn edge_pair(
     fr: &Frame,
     centers: (Vec3, Vec3),
 ) -> Option<(Vec3, f32)> {
-    edge_pair_placed(arc, e_b, (fr.point(p0_b), fr.vector(e_b)), (cba, dba), centers)
+    edge_pair_placed(
+        arc,
+        e_b,
+        (fr.point(p0_b), fr.vector(e_b)),
+        (cba, dba),
+        centers,
+    )
 }
 
 /// [`edge_pair`] with B's edge also given in A's frame (`placed`: start and vector), as

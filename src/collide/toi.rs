@@ -452,7 +452,8 @@ fn spin_reach(shape: &Shape, motion: &Motion) -> f32 {
     let Some(count) = shape.core_vertex_count() else {
         return reach;
     };
-    if !(spin > 0.0) {
+    // Not spinning (or a NaN spin): the plain reach, which the bound multiplies by 0.
+    if spin.is_nan() || spin <= 0.0 {
         return reach;
     }
     let axis = motion
