@@ -1361,3 +1361,40 @@ fn a_manifold_on_a_bound_says_so() {
         assert!(m.min_separation() <= -p.depth + 1e-4, "{m:?}");
     }
 }
+
+/// Root cause: a box deep in a sliver hull (a triangle face with a 0.24 mm edge and 10 m
+/// sides, so its two long side planes meet at an angle of 2e-5 rad). SAT took that face as
+/// the reference; a clipped point 2 cm past the sliver's tip lay within `f32` rounding of
+/// both long side planes, passed them, and stood off B (`point_b not on B`). Fix
+/// (`collide::clip`): clipped points whose projection leaves the reference face's box
+/// (grown by 1e-5 of its coordinates) are dropped; the two points inside remain.
+#[test]
+fn a_sliver_reference_face_keeps_its_points_on_the_face() {
+    // sliver-reference-face-7d4378d2 (narrow_phase, a 30-minute random run at 861af8b;
+    // the values printed by `fuzz/examples/show.rs`).
+    let tiny = -1.5881867e-23;
+    let a = Shape::cuboid(Vec3::new(3.8902588, 2.8902588, 3.7961426)).unwrap();
+    let pa = Iso::new(
+        Vec3::new(7.592041, 7.592041, tiny),
+        Quat::from_xyzw(-0.5, -0.5, -0.5, -0.5),
+    );
+    let sliver = hull(&[
+        Vec3::new(tiny, tiny, 7.592041),
+        Vec3::new(7.592041, 7.592041, 7.592041),
+        Vec3::new(7.772461, 7.592041, 7.592041),
+        Vec3::new(-0.00024414063, tiny, tiny),
+        Vec3::new(-2.0327963e-23, tiny, tiny),
+        Vec3::new(7.592041, 7.592041, 0.092041016),
+    ]);
+    let b = Shape::hull(&sliver);
+    let pb = Iso::IDENTITY;
+    assert_cases(&[("7d4378d2", a, pa, b, pb, 1.5258789e-5)]);
+    let m = carom::collide::contact(&a, &pa, &b, &pb, 1.5258789e-5)
+        .unwrap()
+        .unwrap();
+    assert!(m.len >= 2, "{m:?}");
+    for p in m.points() {
+        // Nothing past the sliver's tip at x = y = 7.592.
+        assert!(p.point_b.x <= 7.5921 && p.point_b.y <= 7.5921, "{p:?}");
+    }
+}

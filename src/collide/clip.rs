@@ -241,11 +241,25 @@ impl ClipBuffers {
     }
 
     /// Run every side plane of `reference` over the front buffer in edge order, back and
-    /// forth between the two buffers.
+    /// forth between the two buffers; then drop the points that lie outside the reference
+    /// face's box (see [`inside_face_box`]).
     fn run(&mut self, reference: &Face, incident_face: FeatureId, closed: bool) -> &ClipPolygon {
+        let out = self.side_planes(reference, incident_face, closed);
+        out.vertices.retain(|v| inside_face_box(reference, v.point));
+        out
+    }
+
+    /// Run every side plane of `reference` over the front buffer in edge order, back and
+    /// forth between the two buffers.
+    fn side_planes(
+        &mut self,
+        reference: &Face,
+        incident_face: FeatureId,
+        closed: bool,
+    ) -> &mut ClipPolygon {
         let planes = (reference.len as usize).min(MAX_FACE_VERTICES);
         if planes < 3 {
-            return &self.front;
+            return &mut self.front;
         }
         let mut k = 0;
         while k < planes {
@@ -259,7 +273,7 @@ impl ClipBuffers {
             );
             k += 1;
             if k == planes || self.back.is_empty() {
-                return &self.back;
+                return &mut self.back;
             }
             clip_by_side_plane(
                 &self.back,
@@ -274,8 +288,41 @@ impl ClipBuffers {
                 break;
             }
         }
-        &self.front
+        &mut self.front
     }
+}
+
+/// Relative slack of [`inside_face_box`]: ten times the rounding of a side-plane test,
+/// far below any real overshoot it exists to catch.
+const FACE_BOX_SLACK: f32 = 1.0e-5;
+
+/// True when `p`, moved along the reference normal onto the face's plane, lies in the
+/// box of the face's vertices grown by [`FACE_BOX_SLACK`] of the largest coordinate.
+///
+/// Why: the side planes of a sliver face (two of its edges nearly parallel, such as a
+/// triangle with a 0.2 mm edge and 10 m sides) meet at a point that `f32` cannot place:
+/// a clipped point 2 cm past the sliver's tip lies within rounding of both long side
+/// planes and passes them (narrow_phase fuzz finding `sliver-reference-face-7d4378d2`).
+/// The box test has no such conditioning: it drops that point. A clip of a well-shaped
+/// face never comes near the box's sides but by rounding, so it keeps every point.
+fn inside_face_box(reference: &Face, p: Vec3) -> bool {
+    let verts = reference.points();
+    let Some(&v0) = verts.first() else {
+        return true;
+    };
+    let n = reference.normal;
+    let q = p - n * n.dot(p - v0);
+    let (mut lo, mut hi) = (v0, v0);
+    let mut size = 0.0f32;
+    for v in verts {
+        lo = lo.min(*v);
+        hi = hi.max(*v);
+        size = scalar::max(size, v.abs().max_elem());
+    }
+    let slack = Vec3::splat(FACE_BOX_SLACK * size);
+    let (lo, hi) = (lo - slack, hi + slack);
+    // NaN fails every compare: such a point is dropped.
+    q.x >= lo.x && q.y >= lo.y && q.z >= lo.z && q.x <= hi.x && q.y <= hi.y && q.z <= hi.z
 }
 
 /// The index after `k` in a cycle of `n` (0 after the last): `(k + 1) % n` without the
