@@ -31,7 +31,9 @@ pub use manifold::{
 };
 pub use sat::{PairCache, SatAxis, EDGE_DEPTH_PREFERENCE, SAT_TOLERANCE};
 pub use separation::{separation, Separation, SeparationStatus};
-pub use toi::{movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS};
+pub use toi::{
+    movement_bounds, time_of_impact, Motion, Toi, MAX_TOI_ITERATIONS, TOI_SEARCH_SAMPLES,
+};
 
 pub(crate) use gjk::distance_in_a;
 pub(crate) use manifold::contact_cached_unchecked;
