@@ -61,6 +61,7 @@ pub mod rng;
 pub mod scenes;
 pub mod shape;
 mod sort;
+pub mod timestep;
 mod world;
 
 pub use config::WorldConfig;
@@ -74,4 +75,5 @@ pub use dynamics::BodyHandle;
 pub use error::{Error, HullError, Input, Pool, SnapshotError, MAX_COORDINATE};
 pub use math::{Aabb, Iso, Mat3, Quat, Vec3};
 pub use shape::{ConvexHull, Ray, Shape};
+pub use timestep::{FixedTimestep, FrameSteps};
 pub use world::{BodyRef, World};
