@@ -2,8 +2,12 @@
 //! semihosting, then restores the host's snapshot of `mixed` at step 500
 //! (`tests/golden/mixed_500.snap`, built into the image), finishes the run and prints
 //! `restored mixed 1000 0x<checksum>`, then the peak stack the run used
-//! (`stack <bytes> bytes`), and exits QEMU with status 0. An error or a panic prints its
-//! message and exits with status 1.
+//! (`stack <bytes> bytes`) and the SysTick ticks of each reference scene's steps
+//! (`ticks.rs`: instructions under `qemu-system-arm -icount shift=0`, see `measure.sh`),
+//! and exits QEMU
+//! with status 0. An error or a panic prints its message and exits with status 1. With
+//! the feature `micromath` the lines are those of `tests/golden/checksums_micromath.txt`
+//! and the snapshot is `tests/golden/mixed_500_micromath.snap`.
 //!
 //! Output, in order:
 //!
@@ -14,6 +18,9 @@
 //! narrow 256 0x…      the narrow-phase workload (carom::scenes::narrow)
 //! restored mixed 1000 0x…
 //! stack <n> bytes
+//! ticks mixed 1000 steps total <t> max <m>
+//! ticks bullets 1000 steps total <t> max <m>
+//! ticks tower 1000 steps total <t> max <m>
 //! ```
 //!
 //! Memory: the world (`ReferenceWorld`, about 540 KB) and its hulls (about 28 KB) live in
@@ -23,6 +30,7 @@
 #![deny(unsafe_code)]
 
 mod stack;
+mod ticks;
 
 use carom::scenes::{self, ReferenceWorld, Scene, REFERENCE_HULLS, SEED};
 use carom::{ConvexHull, Vec3};
@@ -30,7 +38,12 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 
 /// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`].
+#[cfg(not(feature = "micromath"))]
 static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500.snap");
+/// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`], taken by a
+/// `micromath` build (the feature `micromath`: the lines of `checksums_micromath.txt`).
+#[cfg(feature = "micromath")]
+static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500_micromath.snap");
 
 /// Why the run stopped early.
 enum Failure {
@@ -38,6 +51,13 @@ enum Failure {
     Carom(carom::Error),
     /// A static was already handed out (`run` is called once).
     StaticTaken,
+}
+
+/// SysTick ticks of one scene's steps: their sum and the largest.
+#[derive(Clone, Copy, Default)]
+struct StepTicks {
+    total: u64,
+    max: u32,
 }
 
 impl From<carom::Error> for Failure {
@@ -49,7 +69,8 @@ impl From<carom::Error> for Failure {
 #[entry]
 fn main() -> ! {
     let painted = stack::paint();
-    let outcome = run();
+    let mut step_ticks = [StepTicks::default(); Scene::REFERENCE.len()];
+    let outcome = run(&mut step_ticks);
     let used = stack::peak_use(&painted);
     let status = match outcome {
         Ok(()) => debug::EXIT_SUCCESS,
@@ -63,21 +84,41 @@ fn main() -> ! {
         }
     };
     hprintln!("stack {} bytes", used);
+    for (scene, t) in Scene::REFERENCE.iter().zip(step_ticks) {
+        hprintln!(
+            "ticks {} {} steps total {} max {}",
+            scene.name(),
+            scene.steps(),
+            t.total,
+            t.max
+        );
+    }
     debug::exit(status);
     #[allow(clippy::empty_loop)]
     loop {}
 }
 
-/// Print the golden lines and the restored line.
-fn run() -> Result<(), Failure> {
+/// Print the golden lines and the restored line; time each reference scene's steps.
+fn run(step_ticks: &mut [StepTicks; Scene::REFERENCE.len()]) -> Result<(), Failure> {
     let hulls = reference_hulls()?;
     let world: &'static mut ReferenceWorld<'static> =
         cortex_m::singleton!(: ReferenceWorld<'static> = ReferenceWorld::new())
             .ok_or(Failure::StaticTaken)?;
-    for scene in Scene::REFERENCE {
+    let core = cortex_m::Peripherals::take().ok_or(Failure::StaticTaken)?;
+    let ticks = ticks::Ticks::start(core.SYST);
+    for (scene, timed) in Scene::REFERENCE.into_iter().zip(step_ticks.iter_mut()) {
         *world = ReferenceWorld::new();
-        let checksum = scene.run(world, hulls)?;
-        hprintln!("{}", scene.line(checksum));
+        // What Scene::run does, with each step timed.
+        world.set_config(scene.config())?;
+        scene.build(world, hulls)?;
+        for _ in 0..scene.steps() {
+            let start = ticks.now();
+            world.step();
+            let t = ticks.since(start);
+            timed.total += u64::from(t);
+            timed.max = timed.max.max(t);
+        }
+        hprintln!("{}", scene.line(world.checksum()));
     }
     hprintln!("{}", scenes::narrow::run());
     *world = ReferenceWorld::new();

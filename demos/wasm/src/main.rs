@@ -3,13 +3,20 @@
 //! workload — then restores the host's snapshot of `mixed` at step 500
 //! (`tests/golden/mixed_500.snap`, built into the binary), finishes the run and prints
 //! `restored mixed 1000 0x<checksum>`. Built for `wasm32-wasip1` it runs under Node's WASI
-//! (`run.mjs`); built for the host it prints the same lines. Exits 1 on an error.
+//! (`run.mjs`); built for the host it prints the same lines. Exits 1 on an error. With the
+//! feature `micromath` it prints `tests/golden/checksums_micromath.txt` instead and
+//! restores `tests/golden/mixed_500_micromath.snap`.
 
 use carom::scenes::{self, ReferenceWorld, Scene, REFERENCE_HULLS, SEED};
 use carom::{ConvexHull, Vec3};
 
 /// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`].
+#[cfg(not(feature = "micromath"))]
 static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500.snap");
+/// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`], taken by a
+/// `micromath` build (the feature `micromath`: the lines of `checksums_micromath.txt`).
+#[cfg(feature = "micromath")]
+static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500_micromath.snap");
 
 fn main() {
     if let Err(e) = run() {

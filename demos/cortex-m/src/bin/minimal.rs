@@ -6,7 +6,9 @@
 //! ball 120 0x<World::checksum> y <height of the ball's centre in µm> um
 //! ```
 //!
-//! then `stack <n> bytes`, and exit 0 (1 on an error or a panic). The ball (radius 0.5 m,
+//! then `stack <n> bytes` and `ticks ball 120 steps total <t> max <m>` (SysTick ticks of
+//! the steps: instructions under `qemu-system-arm -icount shift=0`, see `ticks.rs` and
+//! `measure.sh`), and exit 0 (1 on an error or a panic). The ball (radius 0.5 m,
 //! no bounce) lands after about 0.85 s and rests with its centre near y = 0.5 m. No float
 //! formatting: the height is printed as an integer so `core::fmt`'s float code stays out
 //! of the image.
@@ -16,6 +18,8 @@
 
 #[path = "../stack.rs"]
 mod stack;
+#[path = "../ticks.rs"]
+mod ticks;
 
 use carom::{BodyDesc, Shape, Vec3, World};
 use cortex_m_rt::entry;
@@ -30,7 +34,8 @@ const STEPS: u32 = 120;
 #[entry]
 fn main() -> ! {
     let painted = stack::paint();
-    let outcome = run();
+    let mut step_ticks = (0u64, 0u32);
+    let outcome = run(&mut step_ticks);
     let used = stack::peak_use(&painted);
     let status = match outcome {
         Ok((checksum, y)) => {
@@ -43,15 +48,25 @@ fn main() -> ! {
         }
     };
     hprintln!("stack {} bytes", used);
+    hprintln!(
+        "ticks ball {} steps total {} max {}",
+        STEPS,
+        step_ticks.0,
+        step_ticks.1
+    );
     debug::exit(status);
     #[allow(clippy::empty_loop)]
     loop {}
 }
 
-/// Drop the ball, step, and return the world's checksum and the ball's height (m).
-fn run() -> Result<(u64, f32), carom::Error> {
+/// Drop the ball, step, and return the world's checksum and the ball's height (m);
+/// `step_ticks` gets the SysTick ticks of the steps (their sum and the largest).
+fn run(step_ticks: &mut (u64, u32)) -> Result<(u64, f32), carom::Error> {
     let world: &'static mut SmallWorld = cortex_m::singleton!(: SmallWorld = World::new())
         .ok_or(carom::Error::OutOfRange(carom::Input::Config))?;
+    let core =
+        cortex_m::Peripherals::take().ok_or(carom::Error::OutOfRange(carom::Input::Config))?;
+    let ticks = ticks::Ticks::start(core.SYST);
     // Ground: a static box whose top face is at y = 0.
     world.add(
         BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0))?)
@@ -60,7 +75,11 @@ fn run() -> Result<(u64, f32), carom::Error> {
     let ball =
         world.add(BodyDesc::dynamic(Shape::sphere(0.5)?).position(Vec3::new(0.0, 4.0, 0.0)))?;
     for _ in 0..STEPS {
+        let start = ticks.now();
         world.step();
+        let t = ticks.since(start);
+        step_ticks.0 += u64::from(t);
+        step_ticks.1 = step_ticks.1.max(t);
     }
     Ok((world.checksum(), world.body(ball)?.position().y))
 }
