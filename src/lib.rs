@@ -10,8 +10,8 @@
 //! - [`shape`] and [`collide`]: stateless geometry, pure functions of (shape, pose)
 //!   pairs: GJK distance, EPA penetration, clipped contact manifolds, time of impact, ray
 //!   casts.
-//! - the world (coming with the dynamics): bodies in fixed-capacity pools and one fixed
-//!   step.
+//! - [`World`]: bodies in fixed-capacity pools and one fixed step, with
+//!   [`FixedTimestep`] to drive it from a game's variable frame times.
 //!
 //! ```
 //! use carom::collide::contact;
