@@ -56,6 +56,8 @@ pub mod config;
 pub mod dynamics;
 pub mod error;
 pub mod math;
+#[cfg(feature = "mint")]
+mod mint_interop;
 pub mod props;
 pub mod rng;
 pub mod scenes;

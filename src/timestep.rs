@@ -40,9 +40,10 @@
 //!
 //! The accumulator is an `f64` of seconds, and `dt` is an `f32` (the world's step). The
 //! only rounding is the addition of each frame's time to the accumulator: taking a step
-//! off (subtracting `dt`) is exact while the accumulator is below `2²⁹ · dt` (it holds
-//! fewer than `max_steps + 1` steps then), and dropping steps keeps the exact remainder.
-//! So each call to [`FixedTimestep::advance`] moves the simulated clock away from the sum
+//! off (subtracting `dt`) is exact while the accumulator holds fewer than `2²⁹` steps
+//! (always, unless steps are dropped: `max_steps` is at most
+//! [`FixedTimestep::MAX_STEPS`] = `2¹⁶`), and dropping steps keeps the exact remainder of
+//! a step. So each call to [`FixedTimestep::advance`] moves the simulated clock away from the sum
 //! of the frame times by at most half an `f64` ulp of `accumulator + elapsed`, below
 //! `1.2 · 10⁻¹⁶ · (dt + elapsed)` seconds: a million frames of 1/60 s drift by less than
 //! `4 · 10⁻¹² s`, far from a step. A step is run when the accumulated time reaches `dt`
@@ -64,8 +65,9 @@ use crate::error::{Error, Input};
 /// # Ok(())
 /// # }
 /// ```
+// No serde: a deserialised clock would bypass `new`'s checks (a negative `dt` or a huge
+// `max_steps` would make `advance` loop for a long time).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FixedTimestep {
     /// The fixed step (s), as `f64` (exact: it was an `f32`).
@@ -104,11 +106,16 @@ pub struct FrameSteps {
 }
 
 impl FixedTimestep {
+    /// The largest cap on steps per frame [`FixedTimestep::new`] accepts (65 536): it
+    /// bounds the work of one [`FixedTimestep::advance`].
+    pub const MAX_STEPS: u32 = 1 << 16;
+
     /// A clock for steps of `dt` seconds (normally `world.config().dt`) that runs at most
     /// `max_steps` steps per frame, with nothing accumulated.
     ///
-    /// Fails with `NonFinite(Time)` or `NotPositive(Time)` for a bad `dt`, and
-    /// `NotPositive(Iterations)` for `max_steps == 0`.
+    /// Fails with `NonFinite(Time)` or `NotPositive(Time)` for a bad `dt`,
+    /// `NotPositive(Iterations)` for `max_steps == 0` and `OutOfRange(Iterations)` above
+    /// [`FixedTimestep::MAX_STEPS`].
     ///
     /// ```
     /// use carom::{Error, FixedTimestep, Input};
@@ -121,6 +128,9 @@ impl FixedTimestep {
         let dt = crate::error::positive(dt, Input::Time)?;
         if max_steps == 0 {
             return Err(Error::NotPositive(Input::Iterations));
+        }
+        if max_steps > Self::MAX_STEPS {
+            return Err(Error::OutOfRange(Input::Iterations));
         }
         Ok(FixedTimestep {
             dt: f64::from(dt),
@@ -298,8 +308,15 @@ mod tests {
             FixedTimestep::new(0.1, 0),
             Err(Error::NotPositive(Input::Iterations))
         );
-        // The smallest positive dt is accepted.
+        assert_eq!(
+            FixedTimestep::new(0.1, FixedTimestep::MAX_STEPS + 1),
+            Err(Error::OutOfRange(Input::Iterations))
+        );
+        // The smallest positive dt and the largest cap are accepted.
         assert!(FixedTimestep::new(f32::from_bits(1), 1).is_ok());
+        let mut most = clock(f32::from_bits(1), FixedTimestep::MAX_STEPS);
+        let s = most.advance(f64::MAX).unwrap();
+        assert_eq!((s.steps, s.dropped), (FixedTimestep::MAX_STEPS, u64::MAX));
     }
 
     #[test]

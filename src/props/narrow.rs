@@ -168,12 +168,15 @@ pub fn distance_properties(
             (v - n * d).length() <= 2.0 * tol,
             "distance: normal not along point_b − point_a",
         )?;
+        // The normal's direction is GJK's `v`, resolved to `GJK_NORMAL_ANGLE` (see there):
+        // along a normal tilted by that much, a point of a face parallel to the other
+        // shape's face falls short of the support by up to the tilt times the face's span.
         check(
-            on_support(a, pose_a, out.point_a, n, tol),
+            on_support(a, pose_a, out.point_a, n, tol + normal_tilt_slack(a)),
             "distance: point_a not A's support point along the normal",
         )?;
         check(
-            on_support(b, pose_b, out.point_b, -n, tol),
+            on_support(b, pose_b, out.point_b, -n, tol + normal_tilt_slack(b)),
             "distance: point_b not B's support point against the normal",
         )?;
     }
@@ -479,6 +482,26 @@ fn inside(shape: &Shape, pose: &Iso, p: Vec3, tol: f32) -> bool {
 
 /// `p` is the shape's support point along unit `u` within `tol`: `u·p >= h(u) − tol`.
 /// A half-space supports only along its normal: there `p` must be on the plane.
+/// How far GJK's normal of separated shapes may be tilted (rad). GJK measures its closest
+/// point `v` by `|v|²` in `f32`, which cannot tell two points of a face parallel to the
+/// other shape's face apart when their lateral offsets differ by less than
+/// `|v| · √(2⁻²³) ≈ 3.5e-4 |v|`: where two faces are parallel, `v` (and with it the
+/// normal) may lean by about 3.5e-4 rad while the distance stays exact (fuzz finding
+/// `parallel-faces-47774539`: two boxes 2.97 m apart face to face, a tilt of 3.8e-4 rad).
+/// Three times that, for the rounding of the supports themselves.
+pub const GJK_NORMAL_ANGLE: f32 = 1.0e-3;
+
+/// The shortfall from the support that a normal tilted by [`GJK_NORMAL_ANGLE`] allows a
+/// point of `shape`: the tilt times the core's span (twice its bounding radius). A
+/// half-space's face is checked by its own normal ([`on_support`]), so 0.
+fn normal_tilt_slack(shape: &Shape) -> f32 {
+    if matches!(shape, Shape::HalfSpace(_)) {
+        0.0
+    } else {
+        GJK_NORMAL_ANGLE * 2.0 * shape.bounding_radius()
+    }
+}
+
 fn on_support(shape: &Shape, pose: &Iso, p: Vec3, u: Vec3, tol: f32) -> bool {
     if let Shape::HalfSpace(h) = shape {
         let n = pose.transform_vector(h.normal);
