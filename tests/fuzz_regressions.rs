@@ -1423,3 +1423,35 @@ fn a_gjk_normal_between_parallel_faces_leans_within_the_documented_angle() {
     let lean = (d.normal.x * d.normal.x + d.normal.y * d.normal.y).sqrt();
     assert!(lean < carom::props::GJK_NORMAL_ANGLE, "{d:?}");
 }
+
+/// Root cause (the property; the same limit of GJK as `parallel-faces-47774539`): a 1.5 cm
+/// sphere whose centre lies on an edge of a hull (within 2e-7 m). The cores are apart by
+/// rounding, so the penetration is the radius, exact, along an exact normal; but GJK's
+/// closest point on the hull is a barycentric combination on a sliver of the simplex and
+/// slid 3.4 mm along the 11 m edge, so `point_b − point_a` leaned off `−depth · n`. Fix
+/// (`props`): along the normal the points must be `depth` apart to the slack; across it
+/// they may slide by `GJK_NORMAL_ANGLE` of the shapes' spans.
+#[test]
+fn deepest_points_of_touching_cores_may_slide_along_the_edge() {
+    // sphere-on-a-hull-edge-5c8d31d2 (narrow_phase, a long run at 47376b3; the values
+    // printed by `fuzz/examples/show.rs`).
+    let a = Shape::sphere(0.015258789).unwrap();
+    let pa = Iso::new(
+        Vec3::new(0.0, 9.1e-44, 0.25),
+        Quat::from_xyzw(0.71869814, 0.6347252, 0.25770015, -0.11911169),
+    );
+    let h = hull(&[
+        Vec3::new(2.446725e-12, 0.0, -1.795166),
+        Vec3::new(1.138432e-39, 0.0, 2.5725098),
+        Vec3::new(0.0, 0.00024414063, -7.8125),
+        Vec3::new(2.5725098, 2.574463, 2.5778809),
+        Vec3::new(0.030273438, 7.7802734, 5.2478027),
+        Vec3::new(5.2077637, 1.4105931e-38, 0.0),
+    ]);
+    let b = Shape::hull(&h);
+    let pb = Iso::IDENTITY;
+    assert_cases(&[("5c8d31d2", a, pa, b, pb, 1.5258789e-5)]);
+    let p = penetration(&a, &pa, &b, &pb).unwrap().unwrap();
+    // The depth is the radius: the centre is on the edge.
+    assert!((p.depth - 0.015258789).abs() < 1e-6, "{p:?}");
+}
