@@ -20,6 +20,8 @@
 #                of the `mixed` scene (125 bodies of every shape in a
 #                World<128, 512, 64>); then the same for `tower` (11 bodies), whose run
 #                gives the same bits with both backends, so both do the same work
+# Then, per core, the stack each query needs (src/bin/stack_queries.rs, libm): the painted
+# peak of one call of each stateless query and of the steps of a 13-body world.
 # The full firmware's golden lines are checked against tests/golden/checksums.txt
 # (libm) or checksums_micromath.txt (micromath) on the way: a wrong line fails the run.
 # QEMU counts instructions, not cycles: a real M3 or M4 takes 1 to ~12 cycles per
@@ -98,3 +100,16 @@ for core in "${cores[@]}"; do
         done
     done
 done
+
+printf '\n| query | %s |\n| --- |%s\n' "$(printf '%s stack (B) | ' "${cores[@]}" | sed 's/ | $//')" \
+    "$(printf ' ---: |%.0s' "${cores[@]}")"
+for core in "${cores[@]}"; do
+    CORE="$core" TIMEOUT="${TIMEOUT:-3000}" bash "$here/run.sh" stack_queries >"$out/stack-$core"
+done
+while read -r _ query _; do
+    row="| $query |"
+    for core in "${cores[@]}"; do
+        row="$row $(sed -nE "s/^stack $query ([0-9]+) bytes\$/\\1/p" "$out/stack-$core") |"
+    done
+    echo "$row"
+done <"$out/stack-${cores[0]}"

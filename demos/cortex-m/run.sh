@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Build the Cortex-M firmwares (release) and run one under QEMU with semihosting.
-# Usage: run.sh [BIN]   BIN: carom-demo-cortex-m (default), minimal or panic_never (the
-# panic-never check: prints nothing, exits 0).
+# Usage: run.sh [BIN]   BIN: carom-demo-cortex-m (default), minimal, stack_queries or
+# panic_never (the panic-never check: prints nothing, exits 0).
 # Environment:
 #   CORE=m4f (default)  thumbv7em-none-eabihf on -machine mps2-an386 -cpu cortex-m4
 #                       (hardware single-precision FPU)
