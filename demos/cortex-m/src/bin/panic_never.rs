@@ -273,8 +273,28 @@ fn main() -> ! {
     let mut acc = queries(&shapes);
     acc = acc.wrapping_add(world(w, &shapes, hulls));
     acc = acc.wrapping_add(scene_doors(w, hulls));
+    acc = acc.wrapping_add(timestep());
     black_box(acc);
     debug_exit(true)
+}
+
+/// The fixed-timestep helper: construction, frames of every kind, alpha, reset.
+fn timestep() -> u32 {
+    let Ok(mut clock) = carom::FixedTimestep::new(f(1.0 / 60.0), black_box(4)) else {
+        return 0;
+    };
+    let mut acc = 0u32;
+    for elapsed in [0.016, 0.05, -1.0, f64::NAN, f64::INFINITY, 1.0e300, 0.0] {
+        if let Ok(s) = clock.advance(black_box(elapsed)) {
+            acc = acc
+                .wrapping_add(s.steps)
+                .wrapping_add(s.dropped as u32)
+                .wrapping_add(s.alpha.to_bits());
+        }
+    }
+    acc = acc.wrapping_add(clock.alpha().to_bits());
+    clock.reset();
+    acc
 }
 
 fn debug_exit(ok: bool) -> ! {
