@@ -1278,6 +1278,29 @@ fn toi_spinning_hull_passing_a_small_sphere_is_not_missed() {
     );
 }
 
+/// The capsule (radius 7.890259 m, half-height `half_height`) at its pose and the nearly
+/// flat hull (three points on the line x = y = 0 and the two `corners`) of the
+/// `capsule-core-touching-a-hull-*` findings, values as the decoder produced them.
+fn capsule_over_flat_hull(
+    half_height: f32,
+    corners: [Vec3; 2],
+) -> (Shape<'static>, Iso, ConvexHull) {
+    let capsule = Shape::capsule(half_height, 7.890259).unwrap();
+    let pose = Iso::new(
+        Vec3::ZERO,
+        Quat::from_xyzw(0.71619636, 0.6325157, 0.2568031, -0.14504795),
+    );
+    let [c0, c1] = corners;
+    let flat = hull(&[
+        Vec3::new(2.446725e-12, 0.0, -1.795166),
+        Vec3::new(1.138432e-39, 0.0, 2.5725098),
+        Vec3::new(0.0, 0.00024414063, -7.8125),
+        c0,
+        c1,
+    ]);
+    (capsule, pose, flat)
+}
+
 /// Root cause (the property; a known limit of carom): a 7.9 m capsule whose core segment
 /// just touches a nearly flat hull. With the capsule first, GJK sees the cores apart by
 /// rounding and the depth is exact (7.890 m, the radius); with the hull first, the order
@@ -1286,23 +1309,18 @@ fn toi_spinning_hull_passing_a_small_sphere_is_not_missed() {
 /// 8.163 m, flagged `Degenerate`. The manifold stands on that bound in both orders; the
 /// property compared it with the converged depth of the argument order. Fix (`props`):
 /// a bound met in either order allows the manifold to be as deep as it, never deeper.
-/// The manifold is then 0.27 m (3.5 %) deeper than exact here (FUZZING.md, open limits).
+/// The manifold is then 0.27 m (3.5 %) deeper than exact here (a documented limit).
 #[test]
 fn a_manifold_may_stand_on_the_bound_epa_met_in_its_own_order() {
     // capsule-core-touching-a-hull-549aad0e (narrow_phase, an 8-minute random run; the
     // values the decoder produced, printed by `fuzz/examples/show.rs`).
-    let a = Shape::capsule(1.7255859, 7.890259).unwrap();
-    let pa = Iso::new(
-        Vec3::ZERO,
-        Quat::from_xyzw(0.71619636, 0.6325157, 0.2568031, -0.14504795),
+    let (a, pa, flat) = capsule_over_flat_hull(
+        1.7255859,
+        [
+            Vec3::new(2.5725098, 2.574463, 2.5778809),
+            Vec3::new(2.5725098, 0.0, 0.0),
+        ],
     );
-    let flat = hull(&[
-        Vec3::new(2.446725e-12, 0.0, -1.795166),
-        Vec3::new(1.138432e-39, 0.0, 2.5725098),
-        Vec3::new(0.0, 0.00024414063, -7.8125),
-        Vec3::new(2.5725098, 2.574463, 2.5778809),
-        Vec3::new(2.5725098, 0.0, 0.0),
-    ]);
     let b = Shape::hull(&flat);
     let pb = Iso::IDENTITY;
     assert_cases(&[("549aad0e", a, pa, b, pb, 1.5258789e-5)]);
@@ -1336,18 +1354,13 @@ fn a_manifold_may_stand_on_the_bound_epa_met_in_its_own_order() {
 fn a_manifold_on_a_bound_says_so() {
     // capsule-core-touching-a-hull-7d7caaf2 (narrow_phase, a 30-minute random run at
     // 96317d7; the values printed by `fuzz/examples/show.rs`).
-    let a = Shape::capsule(1.7305908, 7.890259).unwrap();
-    let pa = Iso::new(
-        Vec3::ZERO,
-        Quat::from_xyzw(0.71619636, 0.6325157, 0.2568031, -0.14504795),
+    let (a, pa, flat) = capsule_over_flat_hull(
+        1.7305908,
+        [
+            Vec3::new(2.5725098, 2.574707, 2.5778809),
+            Vec3::new(2.6015625, 0.0, 0.0),
+        ],
     );
-    let flat = hull(&[
-        Vec3::new(2.446725e-12, 0.0, -1.795166),
-        Vec3::new(1.138432e-39, 0.0, 2.5725098),
-        Vec3::new(0.0, 0.00024414063, -7.8125),
-        Vec3::new(2.5725098, 2.574707, 2.5778809),
-        Vec3::new(2.6015625, 0.0, 0.0),
-    ]);
     let b = Shape::hull(&flat);
     let pb = Iso::IDENTITY;
     assert_cases(&[("7d7caaf2", a, pa, b, pb, 1.5258789e-5)]);

@@ -800,8 +800,20 @@ fn support_in_a(shape: &Shape, shape_in_a: &Iso, dir: Vec3) -> Vec3 {
 
 /// Sphere or capsule `a` against polytope `b` (B at `b_in_a`).
 fn round_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<LocalManifold> {
+    on_axis(a, b, b_in_a, margin, round_vs_polytope_on)
+}
+
+/// The manifold `build` makes on the pair's axis ([`find_axis`]), flagged
+/// [`LocalManifold::depth_bound`] when that axis stands on EPA's bound.
+fn on_axis(
+    a: &Shape,
+    b: &Shape,
+    b_in_a: &Iso,
+    margin: f32,
+    build: fn(&Shape, &Shape, &Iso, f32, &Axis) -> Option<LocalManifold>,
+) -> Option<LocalManifold> {
     let axis = find_axis(a, b, b_in_a, margin)?;
-    round_vs_polytope_on(a, b, b_in_a, margin, &axis).map(|m| LocalManifold {
+    build(a, b, b_in_a, margin, &axis).map(|m| LocalManifold {
         depth_bound: axis.bounded,
         ..m
     })
@@ -888,11 +900,7 @@ fn capsule_on_face(
 /// Two polytopes (B at `b_in_a`): face clipping when a face is aligned with the axis,
 /// else one point.
 fn polytope_vs_polytope(a: &Shape, b: &Shape, b_in_a: &Iso, margin: f32) -> Option<LocalManifold> {
-    let axis = find_axis(a, b, b_in_a, margin)?;
-    polytope_vs_polytope_on(a, b, b_in_a, margin, &axis).map(|m| LocalManifold {
-        depth_bound: axis.bounded,
-        ..m
-    })
+    on_axis(a, b, b_in_a, margin, polytope_vs_polytope_on)
 }
 
 /// [`polytope_vs_polytope`] on the axis found.
