@@ -1,10 +1,11 @@
 //! Print a fuzz input as the values the target sees, to turn a finding into a test.
 //!
 //! Usage: `cargo run --manifest-path fuzz/Cargo.toml --example show -- TARGET FILE`
-//! (TARGET: `narrow_phase` or `toi`).
+//! (TARGET: `narrow_phase`, `toi` or `hull`).
 use arbitrary::{Arbitrary, Unstructured};
 use carom::shape::Shape;
-use carom_fuzz::{PairInput, ToiInput, TIME_UNIT, TOLERANCE_UNIT};
+use carom::shape::ConvexHull;
+use carom_fuzz::{points, PairInput, ToiInput, Vec3Input, TIME_UNIT, TOLERANCE_UNIT};
 
 fn describe(s: &Shape) -> String {
     match s {
@@ -46,6 +47,32 @@ fn main() {
             println!("pose_a: {:?}", input.pose_a.iso());
             println!("pose_b: {:?}", input.pose_b.iso());
             println!("margin: {:?}", input.margin.value(TOLERANCE_UNIT));
+        }
+        "hull" => {
+            let cloud = Vec::<Vec3Input>::arbitrary_take_rest(u).expect("decode");
+            let pts = points(&cloud);
+            println!("points ({}): {pts:?}", pts.len());
+            match ConvexHull::new(&pts) {
+                Err(e) => println!("refused: {e:?}"),
+                Ok(h) => {
+                    // How far the worst input point lies outside a face plane.
+                    let mut worst = 0.0f32;
+                    for p in &pts {
+                        for f in 0..h.face_count() {
+                            let (n, d) = h.plane(f);
+                            worst = worst.max(n.dot(*p) - d);
+                        }
+                    }
+                    println!(
+                        "hull: {} vertices, {} faces, tolerance {:e}, reduced {}, worst point {:e} outside",
+                        h.vertices().len(),
+                        h.face_count(),
+                        h.tolerance(),
+                        h.is_reduced(),
+                        worst
+                    );
+                }
+            }
         }
         _ => eprintln!("unknown target {target}"),
     }
