@@ -3,8 +3,8 @@
 //! Usage: `cargo run --manifest-path fuzz/Cargo.toml --example show -- TARGET FILE`
 //! (TARGET: `narrow_phase`, `toi` or `hull`).
 use arbitrary::{Arbitrary, Unstructured};
-use carom::shape::Shape;
 use carom::shape::ConvexHull;
+use carom::shape::Shape;
 use carom_fuzz::{points, PairInput, ToiInput, Vec3Input, TIME_UNIT, TOLERANCE_UNIT};
 
 fn describe(s: &Shape) -> String {
