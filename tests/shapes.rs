@@ -429,6 +429,69 @@ fn hull_of_more_than_64_vertices_is_reduced_greedily() {
     assert_eq!(hull.vertices(), &points[..]);
 }
 
+/// Fuzz finding `hull/input-point-outside-ef0690fd`: a cloud near a 5.8 m cube with a
+/// 6.3 km spike (build tolerance 6.3 cm). The cube's corner `(5.84, 5.84, 5.83)` lies
+/// within a centimetre of the spike's two long side faces, so the cone to it folded at
+/// the scale of the tolerance and the builder left it out, 1.24 m (20 tolerances) outside
+/// the hull. A finer build (`ConvexHull::new`) now tells those faces apart: the corner is
+/// a vertex and every input point is inside.
+#[test]
+fn finding_a_corner_beside_long_nearly_coplanar_faces_is_not_left_out() {
+    let points: Vec<Vec3> = [
+        (5.835205, 0.003866032, 5.8125),
+        (5.835205, 3.7019043, 5.838135),
+        (3.7019043, 5.835205, 3.7019043),
+        (5.835205, 3.9387207, 3.7019043),
+        (5.8137207, 5.835205, 3.710205),
+        (5.835205, 0.8352051, 5.835205),
+        (5.8688965, 2.3215332, 0.009033203),
+        (5.835205, 3.7019043, 5.835205),
+        (3.7019043, 0.0, 5.835205),
+        (0.0, 3.710205, 5.835205),
+        (5.835205, 3.710205, 5.835205),
+        (0.0, 5.8125, 3.7019043),
+        (5.835205, 5.835205, 0.33520508),
+        (0.8156738, 0.8156738, 6.065674),
+        (0.00024414063, 0.0, 0.8156738),
+        (5.835205, 1.3e-43, 2.3215332),
+        (5.835205, 5.835205, 5.8269043),
+        (-5.833252, 5.835205, -6328.721),
+        (0.0031738281, 0.0, 0.8156738),
+        (5.835205, 0.0, 2.3215332),
+        (5.835205, 5.835205, 5.8269043),
+        (5.835205, 5.585205, 0.8156738),
+        (0.8156738, 0.8156738, 5.835205),
+        (3.3492e-41, 2.3215332, -6328.721),
+        (5.835205, 5.835205, -4.768799),
+        (-8.368024e-8, 3.710205, 5.835205),
+        (3.7019043, 5.835205, 3.7019043),
+        (5.835205, -0.32885742, 5.835205),
+        (5.835205, 3.710205, 5.835205),
+        (3.7019043, 5.835205, 5.772705),
+        (5.585205, 5.835205, 3.7019043),
+        (0.33520508, 5.8269043, 0.8352051),
+        (0.8156738, 0.8156738, 0.0),
+        (-1.5397949, 0.001953125, 5.835205),
+        (5.835205, 5.821289, 3.710205),
+        (0.8156738, 5.897949, 0.08544922),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z))
+    .collect();
+    let hull = ConvexHull::new(&points).unwrap();
+    assert!(!hull.is_reduced());
+    assert!((hull.tolerance() - 6.328721e-2).abs() < 1e-7);
+    let corner = Vec3::new(5.835205, 5.835205, 5.8269043);
+    assert!(hull.vertices().contains(&corner), "{:?}", hull.vertices());
+    let outside = points
+        .iter()
+        .flat_map(|p| (0..hull.face_count()).map(|f| (hull.plane(f), *p)))
+        .map(|((n, d), p)| n.dot(p) - d)
+        .fold(f32::MIN, f32::max);
+    assert!(outside <= hull.tolerance(), "a point {outside} m outside");
+    hull_properties(&points).unwrap();
+}
+
 #[test]
 fn hull_of_the_maximum_input_builds() {
     let mut rng = SplitMix64::new(1024);

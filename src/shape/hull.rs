@@ -122,7 +122,10 @@ impl ConvexHull {
     /// (see [`ConvexHull::TOLERANCE`]): a point less than `eps` outside the hull built so far
     /// is treated as on it, and triangles whose corners lie within `eps` of a common plane
     /// are merged into one face. Every input point ends up inside or within a few `eps` of
-    /// every face plane (unless the hull is reduced, below).
+    /// every face plane (unless the hull is reduced, below). Where a point would be left
+    /// more than `2 eps` outside (a small feature next to long, nearly coplanar faces,
+    /// where the cone to it folds at the scale of `eps`), the mesh is built again at
+    /// `eps / 16`, then `eps / 256`, in place; faces still merge within `eps`.
     ///
     /// The result:
     /// - vertices are input points (bit for bit), in input order; interior points, points
@@ -155,8 +158,28 @@ impl ConvexHull {
     pub fn new(points: &[Vec3]) -> Result<ConvexHull, Error> {
         let eps = validate(points)? as f64;
         let simplex = initial_simplex(points, eps)?;
-        let mut builder = Builder::new(points, eps, simplex)?;
+        let mut build_eps = eps;
+        let mut builder = Builder::new(points, eps, build_eps, simplex)?;
         builder.run()?;
+        // A point the builder had to leave out (see `Builder::run`) can sit far outside
+        // when a small feature meets long, nearly coplanar faces: the cone to it would
+        // fold at the scale of `eps`. Build again at a finer scale, where the faces it
+        // is nearly coplanar with are told apart; faces still merge at `eps`.
+        for _ in 0..FINER_BUILDS {
+            if builder.reduced || !builder.leaves_a_point_outside(RETRY_OUTSIDE * eps) {
+                break;
+            }
+            let finer = build_eps * FINER_BUILD_FACTOR;
+            builder.restart(finer, simplex)?;
+            if builder.run().is_err() {
+                // The finer mesh broke down: the coarser build stands (built again, in
+                // place: one builder on the stack).
+                builder.restart(build_eps, simplex)?;
+                builder.run()?;
+                break;
+            }
+            build_eps = finer;
+        }
         builder.finish()
     }
 
@@ -793,6 +816,14 @@ const MAX_INSERTIONS: usize = 2 * MAX_HULL_INPUT_POINTS;
 /// Full re-tests of the non-vertex points against the finished mesh (see `Builder::run`);
 /// the first almost always finds nothing.
 const MAX_RESCANS: usize = 8;
+/// Rebuilds at a finer build tolerance when a point is left outside (see
+/// [`ConvexHull::new`]), each at [`FINER_BUILD_FACTOR`] times the last one's: down to
+/// `eps / 256`, still ten million times coarser than `f64` rounding at the cloud's scale.
+const FINER_BUILDS: usize = 2;
+/// The build tolerance of each finer build relative to the last.
+const FINER_BUILD_FACTOR: f64 = 1.0 / 16.0;
+/// A point left more than this many `eps` outside asks for a finer build.
+const RETRY_OUTSIDE: f64 = 2.0;
 /// A cone triangle with a hull vertex more than this fraction of `eps` above it is a fold
 /// (see [`Builder::settle_horizon`]).
 const FOLD_FRACTION: f64 = 0.1;
@@ -867,7 +898,11 @@ struct Edge {
 /// owned by the triangle it lies farthest above (by more than `eps`), with that height.
 struct Builder<'p> {
     points: &'p [Vec3],
+    /// The tolerance of the current stage (m): the build tolerance while the mesh grows,
+    /// `merge_eps` once it is turned into faces.
     eps: f64,
+    /// The hull's tolerance (m), [`ConvexHull::tolerance`]: faces merge within it.
+    merge_eps: f64,
     tris: [Tri; MAX_WORK_TRIS],
     /// Owning triangle of each point, or [`NONE`] / [`PENDING`].
     owner: [u8; MAX_HULL_INPUT_POINTS],
@@ -881,12 +916,18 @@ struct Builder<'p> {
 }
 
 impl<'p> Builder<'p> {
-    /// The tetrahedron `[a, b, c, d]` (from [`initial_simplex`]) as four triangles, and
-    /// every other point given to the face it is farthest above.
-    fn new(points: &'p [Vec3], eps: f64, simplex: [u16; 4]) -> Result<Builder<'p>, Error> {
+    /// A builder at build tolerance `eps` over the tetrahedron `simplex` (see
+    /// [`Builder::restart`]), whose faces will merge within `merge_eps`.
+    fn new(
+        points: &'p [Vec3],
+        merge_eps: f64,
+        eps: f64,
+        simplex: [u16; 4],
+    ) -> Result<Builder<'p>, Error> {
         let mut b = Builder {
             points,
             eps,
+            merge_eps,
             tris: [DEAD_TRI; MAX_WORK_TRIS],
             owner: [NONE; MAX_HULL_INPUT_POINTS],
             height: [0.0; MAX_HULL_INPUT_POINTS],
@@ -894,27 +935,42 @@ impl<'p> Builder<'p> {
             vertex_count: 0,
             reduced: false,
         };
+        b.restart(eps, simplex)?;
+        Ok(b)
+    }
+
+    /// Start again, in place, at build tolerance `eps`: the tetrahedron `[a, b, c, d]`
+    /// (from [`initial_simplex`]) as four triangles, and every other point given to the
+    /// face it is farthest above.
+    fn restart(&mut self, eps: f64, simplex: [u16; 4]) -> Result<(), Error> {
+        self.eps = eps;
+        self.tris = [DEAD_TRI; MAX_WORK_TRIS];
+        self.owner = [NONE; MAX_HULL_INPUT_POINTS];
+        self.height = [0.0; MAX_HULL_INPUT_POINTS];
+        self.degree = [0; MAX_HULL_INPUT_POINTS];
+        self.vertex_count = 0;
+        self.reduced = false;
         let [a, bb, c, d] = simplex;
         let faces = [[a, bb, c], [a, d, bb], [bb, d, c], [c, d, a]];
         for (slot, v) in faces.iter().enumerate() {
-            b.add_tri(slot, *v)?;
+            self.add_tri(slot, *v)?;
         }
         // Link each edge to the face holding its reverse.
         for s in 0..faces.len() {
             for k in 0..3 {
-                let (from, to) = (b.tris[s].v[k], b.tris[s].next(k));
-                let other = (0..faces.len()).find(|&o| b.tris[o].edge_index(to, from).is_some());
-                b.tris[s].adj[k] = other.map_or(NONE, |o| o as u8);
+                let (from, to) = (self.tris[s].v[k], self.tris[s].next(k));
+                let other = (0..faces.len()).find(|&o| self.tris[o].edge_index(to, from).is_some());
+                self.tris[s].adj[k] = other.map_or(NONE, |o| o as u8);
             }
         }
         let new_faces = [0u8, 1, 2, 3];
-        for i in 0..points.len().min(MAX_HULL_INPUT_POINTS) {
+        for i in 0..self.points.len().min(MAX_HULL_INPUT_POINTS) {
             if simplex.contains(&(i as u16)) {
                 continue;
             }
-            b.assign(i, &new_faces);
+            self.assign(i, &new_faces);
         }
-        Ok(b)
+        Ok(())
     }
 
     fn point(&self, i: u16) -> D3 {
@@ -1041,6 +1097,15 @@ impl<'p> Builder<'p> {
                 self.assign(i, live);
             }
         }
+    }
+
+    /// Is an input point that is not a vertex more than `limit` above a live triangle?
+    fn leaves_a_point_outside(&self, limit: f64) -> bool {
+        (0..self.points.len().min(MAX_HULL_INPUT_POINTS)).any(|i| {
+            let p = point_at(self.points, i);
+            self.degree.get(i) == Some(&0)
+                && self.tris.iter().any(|t| t.alive && t.height(p) > limit)
+        })
     }
 
     /// The outside point highest above its owner (lowest index on ties).
@@ -1296,6 +1361,7 @@ impl<'p> Builder<'p> {
 
     /// Turn the triangle mesh into the hull's polygon faces and fill a [`ConvexHull`].
     fn finish(mut self) -> Result<ConvexHull, Error> {
+        self.eps = self.merge_eps;
         // Between two planes 2 eps apart: within eps of the plane between them.
         if self.width() <= 2.0 * self.eps {
             return Err(Error::Hull(HullError::Coplanar));
