@@ -1,0 +1,35 @@
+// A tiny static file server for the page (Node >= 18, no packages): serves this
+// directory on 127.0.0.1 and prints `serving http://127.0.0.1:<port>/`.
+// Usage: node serve.mjs [PORT]   (PORT 0: any free port; default 8000)
+import { createServer } from "node:http";
+import { readFile } from "node:fs/promises";
+import { extname, join, normalize, sep } from "node:path";
+import { fileURLToPath } from "node:url";
+
+const root = fileURLToPath(new URL(".", import.meta.url));
+const port = Number(process.argv[2] ?? process.env.PORT ?? 8000);
+const types = {
+  ".html": "text/html; charset=utf-8",
+  ".js": "text/javascript; charset=utf-8",
+  ".wasm": "application/wasm",
+  ".png": "image/png",
+};
+
+const server = createServer(async (req, res) => {
+  const path = decodeURIComponent(new URL(req.url, "http://x").pathname);
+  const file = normalize(join(root, path.endsWith("/") ? path + "index.html" : path));
+  const type = types[extname(file)];
+  if (!file.startsWith(root) || file.includes(`${sep}target${sep}`) || !type) {
+    res.writeHead(404).end("not found\n");
+    return;
+  }
+  try {
+    const body = await readFile(file);
+    res.writeHead(200, { "content-type": type, "cache-control": "no-store" }).end(body);
+  } catch {
+    res.writeHead(404).end("not found\n");
+  }
+});
+server.listen(port, "127.0.0.1", () => {
+  console.log(`serving http://127.0.0.1:${server.address().port}/`);
+});
