@@ -209,16 +209,28 @@ function polygonItem(world, rgb, flags) {
   };
 }
 
-function sphereItem(pos, q, radius, rgb, flags) {
+function sphereItem(pos, q, radius, vel, rgb, flags) {
   const c = toCamera(pos);
   if (c[2] < NEAR + radius) return null;
   const s = project(c);
+  // Fast balls (bullets) get a streak: where they were a step ago.
+  const fast = dot(vel, vel) > 20 * 20;
+  const tail = fast ? toCamera(sub(pos, scale(vel, DT_MS / 1000))) : null;
   const r = Math.max(1.5, cam.focal * radius / c[2]);
   const pole = toCamera(add(pos, rotate(q, [0, radius, 0])));
   const asleep = !(flags & FLAG_AWAKE);
   return {
     depth: c[2], isStatic: false,
     draw() {
+      if (tail && tail[2] > NEAR) {
+        const t = project(tail);
+        ctx.beginPath();
+        ctx.moveTo(t[0], t[1]);
+        ctx.lineTo(s[0], s[1]);
+        ctx.strokeStyle = shade(rgb, 1, false, 0.6);
+        ctx.lineWidth = Math.max(1, r);
+        ctx.stroke();
+      }
       const g = ctx.createRadialGradient(s[0] - 0.35 * r, s[1] - 0.35 * r, 0.1 * r,
         s[0], s[1], r);
       g.addColorStop(0, shade(rgb, 1.15, asleep, 1));
@@ -291,7 +303,7 @@ function draw() {
     const rgb = baseColor(kind, flags);
     const corner = (local) => add(pos, rotate(q, local));
     if (kind === 0) {
-      items.push(sphereItem(pos, q, p0, rgb, flags));
+      items.push(sphereItem(pos, q, p0, [f[o + 12], f[o + 13], f[o + 14]], rgb, flags));
     } else if (kind === 1) {
       items.push(capsuleItem(pos, q, p0, p1, rgb, flags));
     } else if (kind === 2 || (kind === 3 && !hulls[hull])) { // hulls unknown: their box
@@ -346,10 +358,12 @@ function stepTimed(n) {
   avgStepMs = Number.isNaN(avgStepMs) ? ms : 0.95 * avgStepMs + 0.05 * ms;
 }
 
+function ms(x) { return `${x.toFixed(x < 1 ? 3 : 2)} ms`; }
+
 function updateStats() {
   $("steps").textContent = String(ex.carom_step_count());
   $("steptime").textContent = Number.isNaN(lastStepMs) ? "-"
-    : `${lastStepMs.toFixed(2)} ms (avg ${avgStepMs.toFixed(2)} ms)`;
+    : `${ms(lastStepMs)} (avg ${ms(avgStepMs)})`;
   $("bodies").textContent = String(ex.carom_body_count());
   $("awake").textContent = String(ex.carom_awake_count());
   $("contacts").textContent = String(ex.carom_contact_count());

@@ -25,7 +25,13 @@ const server = createServer(async (req, res) => {
   }
   try {
     const body = await readFile(file);
-    res.writeHead(200, { "content-type": type, "cache-control": "no-store" }).end(body);
+    res.writeHead(200, {
+      "content-type": type,
+      "cache-control": "no-store",
+      // Cross-origin isolation: performance.now() then ticks in 5 us, not 100 us.
+      "cross-origin-opener-policy": "same-origin",
+      "cross-origin-embedder-policy": "require-corp",
+    }).end(body);
   } catch {
     res.writeHead(404).end("not found\n");
   }
