@@ -29,6 +29,7 @@
 //! # }
 //! ```
 #![no_std]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 #![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
@@ -58,8 +59,10 @@ pub mod error;
 pub mod math;
 #[cfg(feature = "mint")]
 mod mint_interop;
+#[cfg(feature = "props")]
 pub mod props;
 pub mod rng;
+#[cfg(feature = "scenes")]
 pub mod scenes;
 pub mod shape;
 mod sort;
