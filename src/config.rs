@@ -26,6 +26,29 @@ pub const REUSE_SLACK: f32 = LINEAR_SLOP;
 /// with a bounded push-out, integrates positions and runs `relax_iterations` iterations
 /// without push-out. Contacts are springs of `contact_hertz` with damping ratio
 /// `contact_damping_ratio`: stiff enough to hold stacks, soft enough never to explode.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{Vec3, World, WorldConfig};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// // The Moon, stepped at 120 Hz, with sleeping off.
+/// let config = WorldConfig {
+///     gravity: Vec3::new(0.0, -1.62, 0.0),
+///     dt: 1.0 / 120.0,
+///     sleep_enabled: false,
+///     ..WorldConfig::DEFAULT
+/// };
+/// let world: World<'static, 8, 16> = World::with_config(config)?; // validated
+/// assert_eq!(world.config().dt, 1.0 / 120.0);
+///
+/// // An invalid field is refused, naming it.
+/// let bad = WorldConfig { substeps: 0, ..WorldConfig::DEFAULT };
+/// assert!(World::<'static, 8, 16>::with_config(bad).is_err());
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct WorldConfig {

@@ -1,22 +1,41 @@
 //! The public error type. Every fallible public function returns `Result<_, Error>` and
 //! leaves all state unchanged when it returns `Err`.
+//!
+//! Errors are plain `Copy` values: an [`Error`] says what went wrong, and for input
+//! errors which input ([`Input`]); no message is formatted and nothing is allocated. A
+//! step never fails: what does not fit in a pool during [`crate::World::step`] is dropped
+//! by a documented rule and counted in its [`crate::StepReport`] instead.
+//!
+//! # Examples
+//!
+//! ```
+//! use carom::{Error, Input, Shape};
+//!
+//! assert_eq!(Shape::sphere(-1.0), Err(Error::NotPositive(Input::Radius)));
+//! assert_eq!(Shape::sphere(f32::NAN), Err(Error::NonFinite(Input::Radius)));
+//! assert!(Shape::sphere(0.5).is_ok());
+//! ```
 
-/// Which input an [`Error`] is about.
+/// Which input an [`Error`] is about (carried by [`Error::NonFinite`],
+/// [`Error::NotPositive`], [`Error::Negative`], [`Error::OutOfRange`] and
+/// [`Error::NotUnit`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Input {
-    /// A sphere or capsule radius.
+    /// A sphere or capsule radius ([`crate::Shape::sphere`], [`crate::Shape::capsule`]).
     Radius,
     /// A capsule's half height (half the length of its core segment).
     HalfHeight,
-    /// A cuboid's half-extents.
+    /// A cuboid's half-extents ([`crate::Shape::cuboid`]).
     HalfExtents,
-    /// A point of a hull or triangle.
+    /// A point of a hull or triangle ([`crate::ConvexHull::new`],
+    /// [`crate::Shape::triangle`]).
     Point,
-    /// A plane normal or other direction.
+    /// A plane normal or other direction (a half-space normal, a ray's direction).
     Direction,
-    /// A position.
+    /// A position: a body's, a pose's, a ray's origin (also beyond
+    /// ±[`MAX_COORDINATE`]).
     Position,
     /// A rotation quaternion.
     Rotation,
@@ -28,11 +47,13 @@ pub enum Input {
     Density,
     /// A mass.
     Mass,
-    /// A force or impulse.
+    /// A force, torque or impulse (`World::apply_force` and its kin).
     Force,
-    /// A distance, margin or tolerance.
+    /// A distance, margin or tolerance (a query's margin or maximum distance, a
+    /// configuration's slop or margins).
     Distance,
-    /// A time or time step.
+    /// A time or time step (`WorldConfig::dt`, [`crate::FixedTimestep`]'s step and frame
+    /// times).
     Time,
     /// A material coefficient (restitution or friction).
     Material,
@@ -40,9 +61,11 @@ pub enum Input {
     Damping,
     /// Gravity.
     Gravity,
-    /// An iteration or substep count.
+    /// An iteration or substep count (`WorldConfig::substeps`,
+    /// [`crate::FixedTimestep`]'s steps per frame).
     Iterations,
-    /// A configuration value not listed above.
+    /// A configuration value not listed above (a [`crate::WorldConfig`] field, a scene
+    /// that needs hulls it was not given).
     Config,
 }
 
@@ -51,15 +74,20 @@ pub enum Input {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Pool {
-    /// The body pool (`World`'s `BODIES` capacity).
+    /// The body pool (`World`'s `BODIES` capacity): [`crate::World::add`] on a world
+    /// that already holds `BODIES` bodies.
     Bodies,
-    /// The contact pool.
+    /// The contact pool. Not returned by this version: a full contact pool drops pairs
+    /// during a step and counts them in [`crate::StepReport::dropped_contacts`].
     Contacts,
-    /// A caller-provided output buffer.
+    /// A caller-provided output buffer. Not returned by this version: queries that fill
+    /// a slice return how many results fit (a short snapshot buffer is
+    /// [`Error::BufferTooSmall`]).
     Output,
 }
 
-/// Why a convex hull could not be built.
+/// Why a convex hull could not be built ([`crate::ConvexHull::new`], carried by
+/// [`Error::Hull`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HullError {
@@ -79,38 +107,59 @@ pub enum HullError {
     TooComplex,
 }
 
-/// Everything that can go wrong at carom's public doors.
+/// Everything that can go wrong at carom's public doors. Whatever the variant, the call
+/// changed nothing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]
 pub enum Error {
-    /// The input holds a NaN or an infinity.
+    /// The input holds a NaN or an infinity: a shape size, a point, a pose, a velocity,
+    /// a force, a material or configuration value, a frame time, a query's margin.
     NonFinite(Input),
-    /// The input must be strictly positive (a size, mass, density, time step).
+    /// The input must be strictly positive and is zero or negative: a size (radius,
+    /// half-extents), a mass or density, `dt`, a substep count, a frame's maximum steps.
     NotPositive(Input),
-    /// The input is negative where zero or more is required.
+    /// The input is negative where zero or more is required: a restitution or friction
+    /// coefficient, a damping, a margin, the frame time given to
+    /// [`crate::FixedTimestep::advance`].
     Negative(Input),
-    /// The input is outside its documented range.
+    /// The input is outside its documented range: a size outside
+    /// [`MIN_SIZE`, `MAX_SIZE`](crate::shape::MIN_SIZE), a coordinate beyond
+    /// ±[`MAX_COORDINATE`], a configuration value beyond its bound (see
+    /// [`crate::WorldConfig`]), a triangle with (nearly) no area.
     OutOfRange(Input),
-    /// A rotation quaternion is not of unit length.
+    /// A rotation quaternion is not of unit length (normalise it with
+    /// [`crate::Quat::normalize`]), or a direction that must be unit is not.
     NotUnit(Input),
-    /// A convex hull could not be built.
+    /// A convex hull could not be built from the points given to
+    /// [`crate::ConvexHull::new`]; the [`HullError`] says why.
     Hull(HullError),
-    /// The shape has no volume, so no mass can be derived from a density.
+    /// The shape has no volume, so no mass can be derived from a density: mass
+    /// properties of a half-space or a triangle ([`crate::Shape::mass_properties`]).
     NoVolume,
-    /// The shape may only be used by a static body (half-space planes, triangles).
+    /// The shape may only be used by a static body (half-space planes, triangles):
+    /// [`crate::World::add`] with a dynamic or kinematic body of such a shape.
     StaticOnly,
-    /// A handle refers to a removed body (or was never valid for this world).
+    /// A handle refers to a removed body (or was never valid for this world): any
+    /// [`crate::World`] method taking a [`crate::BodyHandle`] after
+    /// [`crate::World::remove`] (slots are reused with a new generation, so an old handle
+    /// never reaches a new body).
     StaleHandle,
-    /// A fixed-capacity pool is full; nothing was changed.
+    /// A fixed-capacity pool is full; nothing was changed. The [`Pool`] says which:
+    /// today only [`Pool::Bodies`], from [`crate::World::add`].
     PoolFull(Pool),
-    /// A caller-provided buffer is too small; the value is the length needed.
+    /// A caller-provided buffer is too small; the value is the length needed:
+    /// [`crate::World::snapshot`] into a buffer shorter than
+    /// [`crate::World::snapshot_len`].
     BufferTooSmall(u32),
-    /// A snapshot is truncated, corrupt or from an incompatible build.
+    /// A snapshot is truncated, corrupt or from an incompatible build:
+    /// [`crate::World::restore`] and [`crate::World::restore_with_hulls`]; the
+    /// [`SnapshotError`] says why, and the world is unchanged.
     Snapshot(SnapshotError),
 }
 
-/// Why a snapshot was refused.
+/// Why a snapshot was refused by [`crate::World::restore`] (carried by
+/// [`Error::Snapshot`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SnapshotError {
@@ -120,7 +169,7 @@ pub enum SnapshotError {
     BadMagic,
     /// Written by another format version.
     Version,
-    /// Written by a world with other capacities.
+    /// Written by a world with other capacities (`BODIES`, `CONTACTS`, `EVENTS`).
     Capacity,
     /// Written by a build with another math backend (libm vs micromath).
     MathBackend,
@@ -128,7 +177,8 @@ pub enum SnapshotError {
     Checksum,
     /// The contents decode to an invalid state.
     Corrupt,
-    /// A body's hull shape was not found among the hulls given to restore.
+    /// A body's hull shape was not found among the hulls given to restore
+    /// (plain [`crate::World::restore`] looks among the hulls its bodies use now).
     MissingHull,
 }
 

@@ -40,6 +40,32 @@ use crate::shape::Shape;
 ///   about 2 MB overflows the 8 MB main stack of a debug build. No safe way to fill a
 ///   `Box` avoids that (README, "Capacity").
 /// - On the stack of a thread spawned with a big enough `stack_size`.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{BodyDesc, Event, Shape, Vec3, World};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// // 8 bodies, 32 contacts, 16 events per step; small enough for the stack.
+/// let mut world: World<'static, 8, 32, 16> = World::new();
+/// let ground = world.add(
+///     BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0))?).position(Vec3::new(0.0, -0.5, 0.0)),
+/// )?;
+/// let ball = world.add(BodyDesc::dynamic(Shape::sphere(0.25)?).position(Vec3::new(0.0, 1.0, 0.0)))?;
+/// let mut touched = false;
+/// for _ in 0..60 {
+///     let report = world.step();
+///     assert!(!report.overflowed()); // nothing dropped for lack of room
+///     touched |= world.events().iter().any(|e| {
+///         matches!(e, Event::ContactBegin { a, b } if [*a, *b] == [ground, ball])
+///     });
+/// }
+/// assert!(touched);
+/// assert_eq!(world.body_count(), 2);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug)]
 pub struct World<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize = 256> {
     pub(crate) config: WorldConfig,

@@ -114,6 +114,24 @@ pub struct Penetration {
 /// finite depth: `None`. Fails only on an invalid pose.
 ///
 /// `point_b − point_a = −depth · normal` when EPA converged or a closed form answered.
+///
+/// # Examples
+///
+/// ```
+/// use carom::collide::penetration;
+/// use carom::{Iso, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let a = Shape::cuboid(Vec3::splat(0.5))?;
+/// let b = Shape::cuboid(Vec3::splat(0.5))?;
+/// let pose_b = Iso::from_position(Vec3::new(0.8, 0.0, 0.0)); // 0.2 m into a along x
+/// let p = penetration(&a, &Iso::IDENTITY, &b, &pose_b)?.expect("overlapping");
+/// assert!((p.depth - 0.2).abs() < 1e-5);
+/// assert!((p.normal - Vec3::X).length() < 1e-5);
+/// assert!(penetration(&a, &Iso::IDENTITY, &b, &Iso::from_position(Vec3::new(2.0, 0.0, 0.0)))?.is_none());
+/// # Ok(())
+/// # }
+/// ```
 pub fn penetration(
     a: &Shape,
     pose_a: &Iso,

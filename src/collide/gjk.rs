@@ -147,6 +147,23 @@ pub struct DistanceOutput {
 /// which `f32` resolves through `|v|²`: where the closest features are two parallel faces
 /// the normal may lean by up to about `√(2⁻²³) ≈ 3.5e-4` rad (`props::GJK_NORMAL_ANGLE`
 /// allows 1e-3), and the closest points may then sit anywhere on the faces' overlap.
+///
+/// # Examples
+///
+/// ```
+/// use carom::collide::{distance, SimplexCache};
+/// use carom::{Iso, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let a = Shape::cuboid(Vec3::splat(0.5))?;
+/// let b = Shape::sphere(0.5)?;
+/// let mut cache = SimplexCache::default(); // keep one per pair to warm-start the next query
+/// let d = distance(&a, &Iso::IDENTITY, &b, &Iso::from_position(Vec3::new(3.0, 0.0, 0.0)), &mut cache)?;
+/// assert!((d.distance - 2.0).abs() < 1e-5); // from x = 0.5 to x = 2.5
+/// assert!((d.normal - Vec3::X).length() < 1e-5);
+/// # Ok(())
+/// # }
+/// ```
 pub fn distance(
     a: &Shape,
     pose_a: &Iso,

@@ -137,6 +137,29 @@ impl Manifold {
 /// Fails on an invalid pose or a negative or non-finite margin.
 ///
 /// The same as [`contact_cached`] with a fresh cache.
+///
+/// # Examples
+///
+/// ```
+/// use carom::collide::contact;
+/// use carom::{Iso, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let ground = Shape::cuboid(Vec3::new(5.0, 0.5, 5.0))?;
+/// let ball = Shape::sphere(0.5)?;
+/// let ground_pose = Iso::from_position(Vec3::new(0.0, -0.5, 0.0)); // top face at y = 0
+/// let ball_pose = Iso::from_position(Vec3::new(0.0, 0.49, 0.0)); // 1 cm deep
+/// let m = contact(&ground, &ground_pose, &ball, &ball_pose, 0.02)?.expect("touching");
+/// assert_eq!(m.points().len(), 1);
+/// assert!((m.normal - Vec3::Y).length() < 1e-6); // from the ground (A) to the ball (B)
+/// assert!((m.min_separation() + 0.01).abs() < 1e-5); // negative: penetrating
+///
+/// // 5 cm apart: outside the 2 cm margin.
+/// let above = Iso::from_position(Vec3::new(0.0, 0.55, 0.0));
+/// assert!(contact(&ground, &ground_pose, &ball, &above, 0.02)?.is_none());
+/// # Ok(())
+/// # }
+/// ```
 pub fn contact(
     a: &Shape,
     pose_a: &Iso,

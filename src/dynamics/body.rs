@@ -21,6 +21,28 @@ pub enum BodyKind {
 /// Surface properties. Two touching bodies combine theirs: restitution by the larger,
 /// each friction coefficient by the geometric mean `√(μa μb)`, rolling resistance and
 /// twist friction by the larger.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{BodyDesc, Material, Shape, World};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let rubber = Material { restitution: 0.8, static_friction: 1.0, kinetic_friction: 0.8, ..Material::DEFAULT };
+/// let ice = Material { restitution: 0.1, static_friction: 0.05, kinetic_friction: 0.02, ..Material::DEFAULT };
+/// // What a rubber ball on ice gets: the larger restitution, the geometric mean of frictions.
+/// let m = Material::combine(&rubber, &ice);
+/// assert_eq!(m.restitution, 0.8);
+/// assert!((m.kinetic_friction - (0.8f32 * 0.02).sqrt()).abs() < 1e-6);
+///
+/// let mut world: World<'static, 4, 8> = World::new();
+/// world.add(BodyDesc::dynamic(Shape::sphere(0.1)?).material(rubber))?;
+/// // Materials are checked when they enter a world.
+/// let bad = Material { restitution: -1.0, ..Material::DEFAULT };
+/// assert!(world.add(BodyDesc::dynamic(Shape::sphere(0.1)?).material(bad)).is_err());
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
@@ -112,6 +134,35 @@ pub enum MassSpec {
 
 /// Everything needed to add a body. Build with [`BodyDesc::dynamic`], [`BodyDesc::fixed`]
 /// or [`BodyDesc::kinematic`] and chain setters; [`crate::World::add`] validates it.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{BodyDesc, BodyKind, Quat, Shape, Vec3, World};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let mut world: World<'static, 8, 16> = World::new();
+/// // A static ground, and a spinning box thrown at it.
+/// world.add(
+///     BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0))?)
+///         .position(Vec3::new(0.0, -0.5, 0.0)),
+/// )?;
+/// let cube = world.add(
+///     BodyDesc::dynamic(Shape::cuboid(Vec3::splat(0.25))?)
+///         .position(Vec3::new(0.0, 2.0, 0.0))
+///         .rotation(Quat::from_axis_angle(Vec3::Y, 0.3))
+///         .velocity(Vec3::new(1.0, 0.0, 0.0))
+///         .angular_velocity(Vec3::new(0.0, 0.0, 2.0))
+///         .density(500.0) // kg/m³: 62.5 kg for this box
+///         .user_data(42),
+/// )?;
+/// let body = world.body(cube)?;
+/// assert_eq!(body.kind(), BodyKind::Dynamic);
+/// assert!((body.mass() - 62.5).abs() < 1e-3);
+/// assert_eq!(body.user_data(), 42);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BodyDesc<'a> {
     /// Collision shape (in the body's frame).

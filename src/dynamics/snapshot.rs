@@ -696,6 +696,34 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
 
     /// Write the dynamic state into `buf`; returns the bytes written. Fails with
     /// `BufferTooSmall(needed)` (nothing meaningful written) when `buf` is too short.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use carom::{BodyDesc, Shape, Vec3, World};
+    ///
+    /// # fn main() -> Result<(), carom::Error> {
+    /// type W = World<'static, 4, 8>;
+    /// let mut world = W::new();
+    /// world.add(BodyDesc::dynamic(Shape::sphere(0.5)?).position(Vec3::new(0.0, 5.0, 0.0)))?;
+    /// world.step();
+    ///
+    /// // Save, run ahead, roll back: the world continues bit-identically.
+    /// let mut buf = vec![0u8; W::max_snapshot_len()];
+    /// let n = world.snapshot(&mut buf)?;
+    /// let saved = world.checksum();
+    /// for _ in 0..10 {
+    ///     world.step();
+    /// }
+    /// world.restore(&buf[..n])?;
+    /// assert_eq!(world.checksum(), saved);
+    ///
+    /// // A snapshot restores only into the same world type and build.
+    /// let mut other: World<'static, 8, 8> = World::new();
+    /// assert!(other.restore(&buf[..n]).is_err());
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn snapshot(&self, buf: &mut [u8]) -> Result<usize, Error> {
         let needed = self.snapshot_len();
         if buf.len() < needed {

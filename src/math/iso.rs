@@ -4,6 +4,20 @@ use super::{Quat, Vec3};
 
 /// A rigid transform: rotate by `rotation`, then translate by `position`.
 /// Maps a body's local frame to the world frame.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{Iso, Quat, Vec3};
+/// use core::f32::consts::FRAC_PI_2;
+///
+/// // A pose 2 m up, turned a quarter about +Y.
+/// let pose = Iso::new(Vec3::new(0.0, 2.0, 0.0), Quat::from_axis_angle(Vec3::Y, FRAC_PI_2));
+/// let world = pose.transform_point(Vec3::X); // a point 1 m along the body's local +X
+/// assert!((world - Vec3::new(0.0, 2.0, -1.0)).length() < 1e-6);
+/// let back = pose.inverse_transform_point(world);
+/// assert!((back - Vec3::X).length() < 1e-6);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

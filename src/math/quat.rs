@@ -3,6 +3,22 @@ use core::ops::Mul;
 use super::{scalar, Vec3};
 
 /// A rotation quaternion `w + xi + yj + zk`. Unit length when used as a rotation.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{Quat, Vec3};
+/// use core::f32::consts::FRAC_PI_2;
+///
+/// // A quarter turn about +Y takes +X to −Z (right-handed).
+/// let q = Quat::from_axis_angle(Vec3::Y, FRAC_PI_2);
+/// let v = q.rotate(Vec3::X);
+/// assert!((v - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+/// assert!(q.is_unit());
+/// // Composition: `a * b` rotates by `b`, then by `a`.
+/// let half_turn = q * q;
+/// assert!((half_turn.rotate(Vec3::X) + Vec3::X).length() < 1e-6);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

@@ -3,6 +3,19 @@ use core::ops::{Add, AddAssign, Div, Index, Mul, MulAssign, Neg, Sub, SubAssign}
 use super::scalar;
 
 /// A 3D vector of `f32` (metres, metres per second, newtons: the unit is the caller's).
+///
+/// # Examples
+///
+/// ```
+/// use carom::Vec3;
+///
+/// let a = Vec3::new(1.0, 2.0, 3.0);
+/// let b = Vec3::X * 2.0;
+/// assert_eq!(a + b, Vec3::new(3.0, 2.0, 3.0));
+/// assert_eq!(a.dot(Vec3::Y), 2.0);
+/// assert_eq!(Vec3::X.cross(Vec3::Y), Vec3::Z); // right-handed
+/// assert_eq!(Vec3::new(3.0, 4.0, 0.0).length(), 5.0);
+/// ```
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]

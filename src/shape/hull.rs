@@ -29,6 +29,32 @@ pub const MAX_HULL_INPUT_POINTS: usize = 1024;
 
 /// A convex polytope. Build it with [`ConvexHull::new`]; it is plain data, `Copy`, and about
 /// 4.2 KiB.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{ConvexHull, Error, HullError, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// // A unit cube's corners and one point inside it.
+/// let mut points = [Vec3::ZERO; 9];
+/// for (i, p) in points.iter_mut().take(8).enumerate() {
+///     *p = Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
+/// }
+/// points[8] = Vec3::splat(0.5);
+/// let hull = ConvexHull::new(&points)?;
+/// assert_eq!(hull.vertices().len(), 8); // the inner point is not a vertex
+///
+/// // Shapes borrow hulls: many bodies can share this one.
+/// let shape = Shape::hull(&hull);
+/// assert!((shape.mass_properties(1.0)?.mass - 1.0).abs() < 1e-4);
+///
+/// // Flat clouds have no volume.
+/// let flat = [Vec3::ZERO, Vec3::X, Vec3::Z, Vec3::new(1.0, 0.0, 1.0)];
+/// assert_eq!(ConvexHull::new(&flat), Err(Error::Hull(HullError::Coplanar)));
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ConvexHull {
     /// Vertices (local frame, m); the first `vertex_count` are used.

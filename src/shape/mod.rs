@@ -192,6 +192,23 @@ pub struct MassProperties {
 }
 
 /// A ray: `origin + t · direction` for `t >= 0`, `direction` of unit length, `t` in metres.
+///
+/// # Examples
+///
+/// ```
+/// use carom::{Iso, Ray, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// // From x = -5 towards +x (the direction is normalised).
+/// let ray = Ray::new(Vec3::new(-5.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0))?;
+/// let ball = Shape::sphere(1.0)?;
+/// let hit = ball.cast_ray(&Iso::IDENTITY, &ray, 100.0)?.expect("the ray meets the ball");
+/// assert!((hit.t - 4.0).abs() < 1e-5); // enters at x = -1
+/// assert!((hit.normal.x + 1.0).abs() < 1e-5);
+/// assert_eq!(ball.cast_ray(&Iso::IDENTITY, &ray, 3.0)?, None); // too short
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
 pub struct Ray {
@@ -237,6 +254,30 @@ pub struct RayHit {
 
 /// A convex collision shape. Hulls are borrowed, so a world full of the same hull keeps one
 /// copy of it (in a `static`, on the stack or in a `Box`).
+///
+/// # Examples
+///
+/// ```
+/// use carom::{Error, Input, Iso, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let ball = Shape::sphere(0.5)?;
+/// let pill = Shape::capsule(0.5, 0.25)?; // along local Y: 1.5 m long in all
+/// let crate_box = Shape::cuboid(Vec3::new(0.5, 0.5, 0.5))?;
+/// let floor = Shape::half_space(Vec3::Y)?; // static bodies only
+///
+/// // Sizes are checked when a shape is built.
+/// assert_eq!(Shape::sphere(0.0), Err(Error::NotPositive(Input::Radius)));
+///
+/// // Mass properties at a density (kg/m³), and bounds at a pose.
+/// assert!((crate_box.mass_properties(1000.0)?.mass - 1000.0).abs() < 1e-2);
+/// let bounds = pill.aabb(&Iso::from_position(Vec3::new(0.0, 2.0, 0.0)));
+/// assert!((bounds.max.y - 2.75).abs() < 1e-6);
+/// assert_eq!(ball.radius(), 0.5);
+/// assert!(floor.is_static_only());
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape<'a> {
     /// A ball.
