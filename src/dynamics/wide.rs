@@ -32,7 +32,7 @@ use super::contact::Contact;
 use super::contact_solver::{ConstraintPoint, ContactConstraint, Softness};
 use super::solver::{SolverBody, NONE};
 use crate::config::WorldConfig;
-use crate::math::lanes::{F4, M4, V4};
+use crate::math::lanes::{F4, V4};
 use crate::math::Vec3;
 
 /// Colours of the constraint graph, overflow excluded (Box2D uses 24; a body rarely has
@@ -49,6 +49,9 @@ pub(crate) const OVERFLOW: u32 = COLORS as u32;
 /// group (every colour's partial group joins the overflow colour, so the groups hold at
 /// most three empty lanes in all).
 pub(crate) const PAD_SLOTS: usize = 4;
+
+/// The mask of a pass over a full group.
+const ALL_LANES: [bool; 4] = [true; 4];
 
 /// Per-contact data per slot quarter.
 const QUARTER: usize = 19;
@@ -190,11 +193,12 @@ impl<const C: usize> WideStore<C> {
         }
     }
 
-    /// Room for `groups` groups, every slot zeroed (empty lanes); false when the store
-    /// cannot hold them.
+    /// Room for `groups` groups, every lane marked empty; false when the store cannot
+    /// hold them. Slots kept from the last step keep their old numbers: a lane is written
+    /// whole when a constraint is stored in it, and an empty lane is never in a pass's
+    /// mask, so what it holds never reaches a body (lanes do not mix). Only slots new to
+    /// the store are zeroed.
     pub fn reset(&mut self, groups: usize) -> bool {
-        self.main.clear();
-        self.extra.clear();
         self.groups = 0;
         self.overflow_from = 0;
         let slots = groups.saturating_mul(4);
@@ -202,7 +206,8 @@ impl<const C: usize> WideStore<C> {
             return false;
         }
         let in_main = slots.min(C);
-        // Cannot fail: both lengths are within capacity.
+        // Cannot fail: both lengths are within capacity. Shrinking truncates, growing
+        // zeroes the new slots only.
         let _ = self.main.resize_default(in_main);
         let _ = self.extra.resize_default(slots - in_main);
         for g in 0..groups {
@@ -505,13 +510,10 @@ pub(crate) fn colour(bodies: &mut [SolverBody], a: u32, b: u32) -> u32 {
     c
 }
 
-/// Velocities, displacement and rotation of four solver bodies (zero and identity for
-/// [`NONE`] lanes).
+/// Velocities of four solver bodies (zero for [`NONE`] lanes).
 struct Bodies4 {
     v: V4,
     w: V4,
-    dp: V4,
-    rot: M4,
 }
 
 /// What a lane without a solver body reads: at rest, identity rotation, infinite mass.
@@ -535,51 +537,40 @@ fn lanes3(b: &[&SolverBody; 4], f: impl Fn(&SolverBody) -> Vec3) -> V4 {
     }
 }
 
+/// How four bodies' motion in the step moves their anchors along the contact normal
+/// `n`: an anchor `l` (body axes) of a body displaced by `Δp` and turned to `R` moved
+/// `n·(Δp + R l) = n·Δp + (Rᵀ n)·l` along it. One `Rᵀ n` per body and group, then one
+/// dot product per point, instead of a rotation per point.
+struct NormalReach {
+    /// `n·Δp` (m).
+    along: F4,
+    /// `Rᵀ n`: the normal in the body's axes.
+    local: V4,
+}
+
+impl NormalReach {
+    #[inline]
+    fn gather(bodies: &[SolverBody], idx: &[u32; 4], n: &V4) -> NormalReach {
+        let b = four(bodies, idx);
+        NormalReach {
+            along: n.dot(&lanes3(&b, |b| b.dp)),
+            local: V4 {
+                x: n.dot(&lanes3(&b, |b| b.rot.x)),
+                y: n.dot(&lanes3(&b, |b| b.rot.y)),
+                z: n.dot(&lanes3(&b, |b| b.rot.z)),
+            },
+        }
+    }
+}
+
 impl Bodies4 {
-    /// Velocities, displacements and rotation matrices of four solver bodies.
+    /// Velocities of four solver bodies.
     #[inline]
     fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
         let b = four(bodies, idx);
         Bodies4 {
             v: lanes3(&b, |b| b.v),
             w: lanes3(&b, |b| b.w),
-            dp: lanes3(&b, |b| b.dp),
-            rot: M4 {
-                x: lanes3(&b, |b| b.rot.x),
-                y: lanes3(&b, |b| b.rot.y),
-                z: lanes3(&b, |b| b.rot.z),
-            },
-        }
-    }
-
-    /// [`Bodies4::gather`] of the velocities only (displacement zero, rotation the
-    /// identity): for passes that never read the poses.
-    #[inline]
-    fn gather_velocities(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
-        let b = four(bodies, idx);
-        let one = F4::splat(1.0);
-        let zero = F4::ZERO;
-        Bodies4 {
-            v: lanes3(&b, |b| b.v),
-            w: lanes3(&b, |b| b.w),
-            dp: V4::default(),
-            rot: M4 {
-                x: V4 {
-                    x: one,
-                    y: zero,
-                    z: zero,
-                },
-                y: V4 {
-                    x: zero,
-                    y: one,
-                    z: zero,
-                },
-                z: V4 {
-                    x: zero,
-                    y: zero,
-                    z: one,
-                },
-            },
         }
     }
 
@@ -627,16 +618,21 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
         };
         let (masks, n) = passes(&group, overflow);
         for mask in masks.iter().take(n) {
-            warm_start_group(&mut group, bodies, *mask);
+            if *mask == ALL_LANES {
+                warm_start_group(&mut group, bodies, ALL_LANES);
+            } else {
+                warm_start_group(&mut group, bodies, *mask);
+            }
         }
     }
 }
 
+#[inline(always)]
 fn warm_start_group(group: &mut Group<'_>, bodies: &mut [SolverBody], mask: [bool; 4]) {
     let ia = group.s0.idx;
     let ib = group.s1.idx;
-    let mut a = Bodies4::gather_velocities(bodies, &ia);
-    let mut b = Bodies4::gather_velocities(bodies, &ib);
+    let mut a = Bodies4::gather(bodies, &ia);
+    let mut b = Bodies4::gather(bodies, &ib);
     let keep = |x: F4| F4::ZERO.select_where(mask, x);
     let shared = Shared::load(&group.s0.s);
     for j in 0..4 {
@@ -729,12 +725,19 @@ pub(crate) fn solve<const C: usize>(
         };
         let (masks, n) = passes(&group, overflow);
         for mask in masks.iter().take(n) {
-            solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, *mask);
+            // A full group (every coloured group but the last) gets its own copy of the
+            // kernel, where the lane selects fold away.
+            if *mask == ALL_LANES {
+                solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, ALL_LANES);
+            } else {
+                solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, *mask);
+            }
         }
     }
 }
 
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn solve_group(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
@@ -750,6 +753,9 @@ fn solve_group(
     let mut b = Bodies4::gather(bodies, &ib);
     let sh = Shared::load(&group.s0.s);
     let n = sh.n;
+    let reach_a = NormalReach::gather(bodies, &ia, &n);
+    let reach_b = NormalReach::gather(bodies, &ib, &n);
+    let moved = reach_b.along - reach_a.along;
     let (one, zero) = (F4::splat(1.0), F4::ZERO);
     let (soft_bias, soft_mass, soft_impulse) = if use_bias {
         (
@@ -767,9 +773,9 @@ fn solve_group(
     for j in 0..4 {
         let p = group.point_mut(j);
         // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
-        let anchor_a = a.dp.add(&a.rot.mul_vec(&p.local_a));
-        let anchor_b = b.dp.add(&b.rot.mul_vec(&p.local_b));
-        let s = p.adjusted + n.dot(&anchor_b.sub(&anchor_a));
+        //   = adjusted + (n·Δp_b − n·Δp_a) + ((R_bᵀ n)·l_b − (R_aᵀ n)·l_a)
+        let turned = reach_b.local.dot(&p.local_b) - reach_a.local.dot(&p.local_a);
+        let s = p.adjusted + (moved + turned);
         // Speculative (s > 0): rigid, close the gap; else soft push-out (or none).
         let soft_push = (soft_bias * s).max(max_push);
         let bias = s.gt_select(zero, s * inv_h, soft_push);
@@ -849,6 +855,7 @@ fn clip_to_disc(v: [F4; 2], radius: F4) -> ([F4; 2], [bool; 4]) {
 }
 
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn solve_patch(
     group: &mut Group<'_>,
     sh: &Shared,
@@ -942,6 +949,7 @@ fn solve_patch(
     group.s3.idx = flags_out;
 }
 
+#[inline(always)]
 fn solve_rolling(
     group: &mut Group<'_>,
     sh: &Shared,

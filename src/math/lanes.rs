@@ -9,8 +9,6 @@
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-#[cfg(test)]
-use super::Mat3;
 use super::{scalar, Vec3};
 
 /// Four `f32` lanes.
@@ -237,37 +235,6 @@ impl V4 {
     }
 }
 
-/// Four [`Mat3`] lanes (columns), structure of arrays.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub(crate) struct M4 {
-    /// First column.
-    pub x: V4,
-    /// Second column.
-    pub y: V4,
-    /// Third column.
-    pub z: V4,
-}
-
-impl M4 {
-    /// Set lane `l`.
-    #[cfg(test)]
-    #[inline]
-    pub fn set(&mut self, l: usize, m: &Mat3) {
-        self.x.set(l, m.x);
-        self.y.set(l, m.y);
-        self.z.set(l, m.z);
-    }
-
-    /// `M v` per lane, as [`Mat3::mul_vec`]: `x v.x + y v.y + z v.z`.
-    #[inline]
-    pub fn mul_vec(&self, v: &V4) -> V4 {
-        let a = self.x.scale(v.x);
-        let b = self.y.scale(v.y);
-        let c = self.z.scale(v.z);
-        a.add(&b).add(&c)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,21 +246,16 @@ mod tests {
         for _ in 0..1000 {
             let a: [Vec3; 4] = core::array::from_fn(|_| rng.unit_vector() * rng.range(-5.0, 5.0));
             let b: [Vec3; 4] = core::array::from_fn(|_| rng.unit_vector() * rng.range(-5.0, 5.0));
-            let m: [Mat3; 4] = core::array::from_fn(|_| Mat3::from_quat(rng.rotation()));
             let mut va = V4::default();
             let mut vb = V4::default();
-            let mut mm = M4::default();
             for l in 0..4 {
                 va.set(l, a[l]);
                 vb.set(l, b[l]);
-                mm.set(l, &m[l]);
             }
             let dot = va.dot(&vb);
-            let mv = mm.mul_vec(&va);
             let s = dot.sqrt();
             for l in 0..4 {
                 assert_eq!(dot.lane(l).to_bits(), a[l].dot(b[l]).to_bits());
-                assert_eq!(mv.lane(l), m[l].mul_vec(a[l]));
                 assert_eq!(s.lane(l).to_bits(), scalar::sqrt(a[l].dot(b[l])).to_bits());
             }
         }
