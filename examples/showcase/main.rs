@@ -69,6 +69,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     scenes::make_hulls(&mut hulls, SEED)?;
     let hulls: &'static [ConvexHull] = Box::leak(hulls.into_boxed_slice());
 
+    let outcomes = if cfg!(debug_assertions) {
+        // A debug build's `Box::new` builds a world on the stack before moving it to the
+        // heap (README, Capacity), and 9 MB worlds overflow the main thread's 8 MB: give
+        // it a thread with room. Release builds build worlds in place and need none.
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn(move || run_all(hulls))?
+            .join()
+            .map_err(|_| "the scenes' thread panicked")??
+    } else {
+        run_all(hulls)?
+    };
+    eprint!("\r{:60}\r", "");
+
+    table(&outcomes);
+    write_pictures(&dir, &outcomes)?;
+    Ok(())
+}
+
+/// Run every scene of [`SCENES`], each in a new world.
+fn run_all(hulls: &'static [ConvexHull]) -> Result<Vec<Outcome>, Error> {
     let mut outcomes = Vec::new();
     for scene in SCENES {
         // Worlds are inline and large: on the heap, sized to the scene. The reference
@@ -85,11 +106,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         };
         outcomes.push(outcome);
     }
-    eprint!("\r{:60}\r", "");
-
-    table(&outcomes);
-    write_pictures(&dir, &outcomes)?;
-    Ok(())
+    Ok(outcomes)
 }
 
 /// Run `scene` in a new `World<B, C, E>` on the heap (`Box::new` builds it in place in a
