@@ -550,14 +550,13 @@ struct NormalReach {
 
 impl NormalReach {
     #[inline]
-    fn gather(bodies: &[SolverBody], idx: &[u32; 4], n: &V4) -> NormalReach {
-        let b = four(bodies, idx);
+    fn gather(b: &[&SolverBody; 4], n: &V4) -> NormalReach {
         NormalReach {
-            along: n.dot(&lanes3(&b, |b| b.dp)),
+            along: n.dot(&lanes3(b, |b| b.dp)),
             local: V4 {
-                x: n.dot(&lanes3(&b, |b| b.rot.x)),
-                y: n.dot(&lanes3(&b, |b| b.rot.y)),
-                z: n.dot(&lanes3(&b, |b| b.rot.z)),
+                x: n.dot(&lanes3(b, |b| b.rot.x)),
+                y: n.dot(&lanes3(b, |b| b.rot.y)),
+                z: n.dot(&lanes3(b, |b| b.rot.z)),
             },
         }
     }
@@ -567,10 +566,15 @@ impl Bodies4 {
     /// Velocities of four solver bodies.
     #[inline]
     fn gather(bodies: &[SolverBody], idx: &[u32; 4]) -> Bodies4 {
-        let b = four(bodies, idx);
+        Bodies4::of(&four(bodies, idx))
+    }
+
+    /// Velocities of the four solver bodies `b`.
+    #[inline]
+    fn of(b: &[&SolverBody; 4]) -> Bodies4 {
         Bodies4 {
-            v: lanes3(&b, |b| b.v),
-            w: lanes3(&b, |b| b.w),
+            v: lanes3(b, |b| b.v),
+            w: lanes3(b, |b| b.w),
         }
     }
 
@@ -749,12 +753,13 @@ fn solve_group(
 ) {
     let ia = group.s0.idx;
     let ib = group.s1.idx;
-    let mut a = Bodies4::gather(bodies, &ia);
-    let mut b = Bodies4::gather(bodies, &ib);
     let sh = Shared::load(&group.s0.s);
     let n = sh.n;
-    let reach_a = NormalReach::gather(bodies, &ia, &n);
-    let reach_b = NormalReach::gather(bodies, &ib, &n);
+    let (body_a, body_b) = (four(bodies, &ia), four(bodies, &ib));
+    let mut a = Bodies4::of(&body_a);
+    let mut b = Bodies4::of(&body_b);
+    let reach_a = NormalReach::gather(&body_a, &n);
+    let reach_b = NormalReach::gather(&body_b, &n);
     let moved = reach_b.along - reach_a.along;
     let (one, zero) = (F4::splat(1.0), F4::ZERO);
     let (soft_bias, soft_mass, soft_impulse) = if use_bias {
@@ -796,16 +801,13 @@ fn solve_group(
         levers += new * p.twist_arm;
         // The speed at impact, for restitution: the closing speed the point had when it
         // first pushed this step (it includes the gravity of the sub-steps before).
-        let mut first = mask;
-        let lanes = p.total_impulse.0.iter().zip(&delta.0);
-        for ((f, (t, d)), (v, s0)) in first
-            .iter_mut()
-            .zip(lanes)
-            .zip(vn.0.iter().zip(&p.normal_speed0.0))
-        {
-            *f = *f && *t == 0.0 && *d > 0.0 && *v < *s0;
-        }
-        p.normal_speed0 = p.normal_speed0.select_where(first, vn);
+        // Per lane: if (in the mask) the point had not pushed before (total 0), pushes
+        // now (delta > 0) and closes faster than recorded (vn < speed0), record vn.
+        let s0 = p.normal_speed0;
+        let faster = s0.gt_select(vn, vn, s0);
+        let pushes = delta.gt_select(zero, faster, s0);
+        let first = p.total_impulse.eq_select(zero, pushes, s0);
+        p.normal_speed0 = s0.select_where(mask, first);
         p.normal_impulse = new;
         p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         p.separation = p.separation.select_where(mask, s);
@@ -827,31 +829,37 @@ fn tangent_speeds(a: &Bodies4, b: &Bodies4, sh: &Shared, q1: &[F4; QUARTER]) -> 
 }
 
 /// Lane-wise `v` shortened to length at most `radius` (zero where the radius is not
-/// positive), and which lanes were shortened; as `contact_solver::clip_to_disc`.
+/// positive); as `contact_solver::clip_to_disc`, lane for lane: `r / |v|` is formed in
+/// every lane, and used only where `|v|² > r²` (so `|v| > 0`).
 #[inline]
-fn clip_to_disc(v: [F4; 2], radius: F4) -> ([F4; 2], [bool; 4]) {
+fn clip_to_disc(v: [F4; 2], radius: F4) -> [F4; 2] {
     let l2 = v[0] * v[0] + v[1] * v[1];
     let r2 = radius * radius;
-    let root = l2.sqrt();
-    let mut out = v;
-    let mut clipped = [false; 4];
-    for l in 0..4 {
+    let s = radius.div(l2.sqrt());
+    let zero = F4::ZERO;
+    let out = [
+        l2.gt_select(r2, v[0] * s, v[0]),
+        l2.gt_select(r2, v[1] * s, v[1]),
+    ];
+    // A NaN radius compares false: zero, as the scalar row.
+    [
+        radius.gt_select(zero, out[0], zero),
+        radius.gt_select(zero, out[1], zero),
+    ]
+}
+
+/// Which lanes [`clip_to_disc`] shortens (a non-zero `v` with no positive radius counts).
+fn clipped_lanes(v: [F4; 2], radius: F4) -> [bool; 4] {
+    let l2 = v[0] * v[0] + v[1] * v[1];
+    let r2 = radius * radius;
+    core::array::from_fn(|l| {
         let (x, y, r) = (v[0].lane(l), v[1].lane(l), radius.lane(l));
-        let (nx, ny, c) = if r.is_nan() || r <= 0.0 {
-            (0.0, 0.0, x != 0.0 || y != 0.0)
-        } else if l2.lane(l) > r2.lane(l) {
-            let s = r / root.lane(l);
-            (x * s, y * s, true)
+        if r.is_nan() || r <= 0.0 {
+            x != 0.0 || y != 0.0
         } else {
-            (x, y, false)
-        };
-        out[0].set(l, nx);
-        out[1].set(l, ny);
-        if let Some(m) = clipped.get_mut(l) {
-            *m = c;
+            l2.lane(l) > r2.lane(l)
         }
-    }
-    (out, clipped)
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -883,7 +891,8 @@ fn solve_patch(
         old[0] - (mxx * v[0] + mxy * v[1]),
         old[1] - (mxy * v[0] + myy * v[1]),
     ];
-    let (clipped_new, clipped) = clip_to_disc(wanted, mu * total);
+    let radius = mu * total;
+    let clipped_new = clip_to_disc(wanted, radius);
     let mut new = [
         old[0].select_where(mask, clipped_new[0]),
         old[1].select_where(mask, clipped_new[1]),
@@ -893,7 +902,8 @@ fn solve_patch(
     if last {
         let after = tangent_speeds(a, b, sh, q1);
         let stick2 = cfg.stick_speed * cfg.stick_speed;
-        let (kinetic, _) = clip_to_disc(new, sh.mu_k * total);
+        let clipped = clipped_lanes(wanted, radius);
+        let kinetic = clip_to_disc(new, sh.mu_k * total);
         let mut fix = [F4::ZERO; 2];
         for l in 0..4 {
             if !mask.get(l).copied().unwrap_or(false) {
@@ -937,9 +947,7 @@ fn solve_patch(
     let wanted = old - f4(q2, AXIS_MASS + 2) * dw.dot(&sh.n);
     let new_twist = wanted.clamp(-limit, limit);
     // Lanes without a limit keep their impulse (as the scalar row skips them).
-    let has_limit: [bool; 4] =
-        core::array::from_fn(|l| mask.get(l).copied().unwrap_or(false) && limit.lane(l) > 0.0);
-    let new_twist = old.select_where(has_limit, new_twist);
+    let new_twist = old.select_where(mask, limit.gt_select(F4::ZERO, new_twist, old));
     let delta = new_twist - old;
     a.w.sub_scaled(&v4(q3, IA_AXES + 6), delta);
     b.w.add_scaled(&v4(q3, IB_AXES + 6), delta);
@@ -970,7 +978,7 @@ fn solve_rolling(
         old[0] - f4(q2, AXIS_MASS) * dw.dot(&sh.t1),
         old[1] - f4(q2, AXIS_MASS + 1) * dw.dot(&sh.t2),
     ];
-    let (clip, _) = clip_to_disc(wanted, sh.rolling * total);
+    let clip = clip_to_disc(wanted, sh.rolling * total);
     let new = [
         old[0].select_where(on, clip[0]),
         old[1].select_where(on, clip[1]),

@@ -66,6 +66,14 @@ impl F4 {
         ])
     }
 
+    /// Lane-wise `self / o`.
+    #[inline]
+    pub fn div(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([a0 / b0, a1 / b1, a2 / b2, a3 / b3])
+    }
+
     /// Lane-wise [`scalar::sqrt`].
     #[inline]
     pub fn sqrt(self) -> F4 {
@@ -84,6 +92,18 @@ impl F4 {
         let mut r = b;
         for ((r, (x, y)), v) in r.0.iter_mut().zip(self.0.iter().zip(o.0.iter())).zip(a.0) {
             if *x > *y {
+                *r = v;
+            }
+        }
+        r
+    }
+
+    /// Lane-wise `if self == o { a } else { b }`.
+    #[inline]
+    pub fn eq_select(self, o: F4, a: F4, b: F4) -> F4 {
+        let mut r = b;
+        for ((r, (x, y)), v) in r.0.iter_mut().zip(self.0.iter().zip(o.0.iter())).zip(a.0) {
+            if *x == *y {
                 *r = v;
             }
         }
