@@ -6,8 +6,9 @@
 //! the first field out of range); the ranges keep every product the step forms inside
 //! `f32`, so no accepted configuration can make a world's state non-finite.
 
+use crate::dynamics::body::Material;
 use crate::error::{Error, Input};
-use crate::math::Vec3;
+use crate::math::{scalar, Vec3};
 
 /// Allowed penetration (m) that the solver and projection leave in place, so resting
 /// contacts stay touching instead of flickering. Box2D uses 0.005 m.
@@ -17,6 +18,85 @@ pub const LINEAR_SLOP: f32 = 0.005;
 /// manifold can be reused while its pair drifts by up to this much (see
 /// `dynamics::contact`, "Manifold reuse"). One slop.
 pub const REUSE_SLACK: f32 = LINEAR_SLOP;
+
+/// How a contact combines a coefficient of its two bodies' materials into one: the
+/// choice PhysX, Unity, Godot, Jolt and rapier offer. [`WorldConfig::friction_combine`]
+/// picks it for the friction coefficients, [`WorldConfig::restitution_combine`] for
+/// restitution.
+///
+/// Every rule is symmetric and plain IEEE single-precision arithmetic (the same bits on
+/// every target). The two means, `Min` and `Max` stay between `a` and `b` (to the last
+/// bit with libm; the `micromath` square root is within 1 ulp); `Multiply` stays in
+/// `[0, 1]` for two coefficients in `[0, 1]` and is capped at 100. So two materials'
+/// coefficients in `[0, 100]` ([`Material::MAX_COEFFICIENT`]) combine into one in
+/// `[0, 100]`, and two restitutions into one in `[0, 1]`.
+///
+/// # Examples
+///
+/// ```
+/// use carom::CombineRule;
+///
+/// assert_eq!(CombineRule::GeometricMean.apply(0.0, 0.9), 0.0);
+/// assert_eq!(CombineRule::Average.apply(0.0, 0.9), 0.45);
+/// assert_eq!(CombineRule::Min.apply(0.2, 0.9), 0.2);
+/// assert_eq!(CombineRule::Max.apply(0.2, 0.9), 0.9);
+/// assert_eq!(CombineRule::Multiply.apply(0.5, 0.5), 0.25);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "arbitrary", derive(arbitrary::Arbitrary))]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CombineRule {
+    /// `√(a · b)`: zero when either is zero (one frictionless body makes every contact
+    /// it touches frictionless). The default for friction (Box2D's, Jolt's).
+    GeometricMean,
+    /// `(a + b) / 2`, computed as `(a + b) · 0.5` (PhysX's and Unity's default).
+    Average,
+    /// The smaller, `min(a, b)`.
+    Min,
+    /// The larger, `max(a, b)`. The default for restitution.
+    Max,
+    /// The product `a · b`, capped at [`Material::MAX_COEFFICIENT`]: `min(a · b, 100)`.
+    Multiply,
+}
+
+impl CombineRule {
+    /// The rule's code in a snapshot: its declaration index.
+    pub(crate) fn code(self) -> u32 {
+        match self {
+            CombineRule::GeometricMean => 0,
+            CombineRule::Average => 1,
+            CombineRule::Min => 2,
+            CombineRule::Max => 3,
+            CombineRule::Multiply => 4,
+        }
+    }
+
+    /// The rule of a snapshot code; `None` for an unknown code.
+    pub(crate) fn from_code(code: u32) -> Option<CombineRule> {
+        match code {
+            0 => Some(CombineRule::GeometricMean),
+            1 => Some(CombineRule::Average),
+            2 => Some(CombineRule::Min),
+            3 => Some(CombineRule::Max),
+            4 => Some(CombineRule::Multiply),
+            _ => None,
+        }
+    }
+
+    /// Combine the coefficients `a` and `b` (finite, non-negative: a material's) by the
+    /// formula on the variant.
+    #[inline]
+    pub fn apply(self, a: f32, b: f32) -> f32 {
+        match self {
+            CombineRule::GeometricMean => scalar::sqrt(a * b),
+            CombineRule::Average => (a + b) * 0.5,
+            CombineRule::Min => scalar::min(a, b),
+            CombineRule::Max => scalar::max(a, b),
+            CombineRule::Multiply => scalar::min(a * b, Material::MAX_COEFFICIENT),
+        }
+    }
+}
 
 /// Settings of a [`crate::World`]. Build with [`WorldConfig::DEFAULT`] and change fields.
 ///
@@ -129,6 +209,13 @@ pub struct WorldConfig {
     pub max_linear_speed: f32,
     /// Largest angular speed (rad/s) a body may reach. Default 100 rad/s; 1e-3 to 1e4.
     pub max_angular_speed: f32,
+    /// How a contact combines its bodies' static and kinetic friction coefficients.
+    /// Default [`CombineRule::GeometricMean`] `√(μa μb)`; any rule. Rolling resistance
+    /// and twist friction always take the larger (see [`Material::combine_with`]).
+    pub friction_combine: CombineRule,
+    /// How a contact combines its bodies' restitutions. Default [`CombineRule::Max`]
+    /// (a bouncy ball bounces on any floor); any rule.
+    pub restitution_combine: CombineRule,
 }
 
 impl WorldConfig {
@@ -186,10 +273,13 @@ impl WorldConfig {
         hit_event_speed: 1.0,
         max_linear_speed: 1000.0,
         max_angular_speed: 100.0,
+        friction_combine: CombineRule::GeometricMean,
+        restitution_combine: CombineRule::Max,
     };
 
     /// Check every field against its documented range; the error names the first bad
-    /// one (`NonFinite` for NaN or infinity, `OutOfRange` otherwise).
+    /// one (`NonFinite` for NaN or infinity, `OutOfRange` otherwise). The combine rules
+    /// (`friction_combine`, `restitution_combine`) have no range: every rule is valid.
     pub fn validate(&self) -> Result<(), Error> {
         let g = self.gravity;
         for v in [g.x, g.y, g.z] {
@@ -218,6 +308,12 @@ impl WorldConfig {
         within(self.max_linear_speed, 1.0e-3, 1.0e4, Input::Config)?;
         within(self.max_angular_speed, 1.0e-3, 1.0e4, Input::Config)?;
         Ok(())
+    }
+
+    /// The material of a contact between bodies of materials `a` and `b` under this
+    /// configuration's combine rules.
+    pub(crate) fn combine_materials(&self, a: &Material, b: &Material) -> Material {
+        Material::combine_with(a, b, self.friction_combine, self.restitution_combine)
     }
 
     /// The sub-step `h = dt / substeps` (s).

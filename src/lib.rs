@@ -205,7 +205,7 @@ mod sort;
 pub mod timestep;
 mod world;
 
-pub use config::WorldConfig;
+pub use config::{CombineRule, WorldConfig};
 pub use dynamics::body::{BodyDesc, BodyKind, MassSpec, Material};
 pub use dynamics::events::{Event, StepReport};
 pub use dynamics::query::{QueryFilter, RayCastHit};

@@ -135,11 +135,17 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         &self.config
     }
 
-    /// Replace the configuration (validated; unchanged on error).
+    /// Replace the configuration (validated; unchanged on error). Existing contacts take
+    /// new combine rules at once.
     pub fn set_config(&mut self, config: WorldConfig) -> Result<(), Error> {
         config.validate()?;
+        let rules_changed = config.friction_combine != self.config.friction_combine
+            || config.restitution_combine != self.config.restitution_combine;
         self.config = config;
         self.quiet = false;
+        if rules_changed {
+            self.recombine_materials(None);
+        }
         Ok(())
     }
 
@@ -165,7 +171,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         let (bodies, contacts, pairs) = (&mut self.bodies, &mut self.contacts, &mut self.pairs);
         self.broad
             .find_new_pairs(bodies, contacts, pairs, &mut report);
-        contact::insert_pairs(contacts, pairs, bodies, &mut report);
+        contact::insert_pairs(contacts, pairs, bodies, &cfg, &mut report);
         self.trace(&mut trace, Stage::BroadPhase);
         // 4 mid phase: every shape is one convex part, so a pair is one part pair.
         // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
@@ -441,17 +447,22 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     pub fn set_material(&mut self, h: BodyHandle, m: Material) -> Result<(), Error> {
         m.validate()?;
         self.body_mut(h)?.material = m;
-        // Contacts keep the combined material of their pair: combine it again.
-        let bodies = &self.bodies;
+        self.recombine_materials(Some(h.index));
+        Ok(())
+    }
+
+    /// Contacts keep the combined material of their pair: combine it again by the
+    /// configured rules, for the contacts of body slot `only` or, with `None`, for all.
+    fn recombine_materials(&mut self, only: Option<u32>) {
+        let (bodies, cfg) = (&self.bodies, &self.config);
         for c in self.contacts.iter_mut() {
-            if c.a != h.index && c.b != h.index {
+            if only.is_some_and(|i| c.a != i && c.b != i) {
                 continue;
             }
             if let (Some(x), Some(y)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) {
-                c.material = Material::combine(&x.material, &y.material);
+                c.material = cfg.combine_materials(&x.material, &y.material);
             }
         }
-        Ok(())
     }
 }
 

@@ -1,6 +1,7 @@
 //! Rigid bodies: description, validated state, and the two integration stages of the
 //! step (velocities, then positions).
 
+use crate::config::CombineRule;
 use crate::error::{finite_vec, non_negative, positive, Error, Input};
 use crate::math::{scalar, Aabb, Iso, Mat3, Quat, Vec3};
 use crate::shape::Shape;
@@ -18,9 +19,11 @@ pub enum BodyKind {
     Kinematic,
 }
 
-/// Surface properties. Two touching bodies combine theirs: restitution by the larger,
-/// each friction coefficient by the geometric mean `√(μa μb)`, rolling resistance and
-/// twist friction by the larger.
+/// Surface properties. Two touching bodies combine theirs by the world's rules
+/// ([`crate::WorldConfig::friction_combine`] and
+/// [`crate::WorldConfig::restitution_combine`]); by default restitution by the larger and
+/// each friction coefficient by the geometric mean `√(μa μb)`. Rolling resistance and
+/// twist friction always take the larger.
 ///
 /// # Examples
 ///
@@ -102,12 +105,35 @@ impl Material {
         Ok(())
     }
 
-    /// The material of a contact between `a` and `b`.
+    /// The material of a contact between `a` and `b` under the default rules
+    /// ([`crate::WorldConfig::DEFAULT`]'s): restitution by [`CombineRule::Max`], static
+    /// and kinetic friction by [`CombineRule::GeometricMean`]. See
+    /// [`Material::combine_with`].
     pub fn combine(a: &Material, b: &Material) -> Material {
+        Self::combine_with(a, b, CombineRule::GeometricMean, CombineRule::Max)
+    }
+
+    /// The material of a contact between `a` and `b`: static and kinetic friction by
+    /// `friction`, restitution by `restitution`, rolling resistance and twist friction
+    /// by the larger (whatever the rules). Symmetric in `a` and `b`.
+    ///
+    /// ```
+    /// use carom::{CombineRule, Material};
+    ///
+    /// let ice = Material { static_friction: 0.0, kinetic_friction: 0.0, ..Material::DEFAULT };
+    /// let m = Material::combine_with(&ice, &Material::DEFAULT, CombineRule::Max, CombineRule::Min);
+    /// assert_eq!(m.kinetic_friction, Material::DEFAULT.kinetic_friction);
+    /// ```
+    pub fn combine_with(
+        a: &Material,
+        b: &Material,
+        friction: CombineRule,
+        restitution: CombineRule,
+    ) -> Material {
         Material {
-            restitution: scalar::max(a.restitution, b.restitution),
-            static_friction: scalar::sqrt(a.static_friction * b.static_friction),
-            kinetic_friction: scalar::sqrt(a.kinetic_friction * b.kinetic_friction),
+            restitution: restitution.apply(a.restitution, b.restitution),
+            static_friction: friction.apply(a.static_friction, b.static_friction),
+            kinetic_friction: friction.apply(a.kinetic_friction, b.kinetic_friction),
             rolling_resistance: scalar::max(a.rolling_resistance, b.rolling_resistance),
             twist_friction: scalar::max(a.twist_friction, b.twist_friction),
         }

@@ -225,13 +225,15 @@ impl<'c, const N: usize> PairIndex<'c, N> {
 }
 
 /// Merge `pairs` (sorted by key, distinct, none already in `contacts`) into `contacts`
-/// as new contacts with no points, keeping the order. Pairs beyond the capacity are
-/// dropped from the end (the highest keys), counted in `report.dropped_contacts`, and their
-/// bodies flagged `moved` so the broad phase offers them again.
+/// as new contacts with no points and their bodies' materials combined by `cfg`'s rules,
+/// keeping the order. Pairs beyond the capacity are dropped from the end (the highest
+/// keys), counted in `report.dropped_contacts`, and their bodies flagged `moved` so the
+/// broad phase offers them again.
 pub(crate) fn insert_pairs<const N: usize, const C: usize>(
     contacts: &mut HVec<Contact, C>,
     pairs: &[(u32, u32)],
     bodies: &mut Pool<Body<'_>, N>,
+    cfg: &WorldConfig,
     report: &mut StepReport,
 ) {
     let room = C - contacts.len();
@@ -278,7 +280,7 @@ pub(crate) fn insert_pairs<const N: usize, const C: usize>(
         let next = if take_new {
             new_at -= 1;
             let Some(&(a, b)) = pair else { break };
-            new_contact(a, b, bodies)
+            new_contact(a, b, bodies, cfg)
         } else {
             old_at -= 1;
             match slots.get(old_at) {
@@ -296,13 +298,19 @@ pub(crate) fn insert_pairs<const N: usize, const C: usize>(
     }
 }
 
-/// A new, empty contact for the pair `a < b`, with their combined material.
-fn new_contact<const N: usize>(a: u32, b: u32, bodies: &Pool<Body<'_>, N>) -> Contact {
+/// A new, empty contact for the pair `a < b`, with their material combined by the
+/// world's rules.
+fn new_contact<const N: usize>(
+    a: u32,
+    b: u32,
+    bodies: &Pool<Body<'_>, N>,
+    cfg: &WorldConfig,
+) -> Contact {
     match (bodies.at(a as usize), bodies.at(b as usize)) {
         (Some(x), Some(y)) => Contact::new_pair(
             a,
             b,
-            Material::combine(&x.material, &y.material),
+            cfg.combine_materials(&x.material, &y.material),
             x.sensor || y.sensor,
         ),
         _ => Contact::new_pair(a, b, Material::DEFAULT, false),
@@ -722,13 +730,21 @@ mod tests {
         }
         let mut contacts: HVec<Contact, 6> = HVec::new();
         let mut report = StepReport::default();
-        insert_pairs(&mut contacts, &[(0, 3), (2, 5)], &mut bodies, &mut report);
+        let cfg = WorldConfig::DEFAULT;
+        insert_pairs(
+            &mut contacts,
+            &[(0, 3), (2, 5)],
+            &mut bodies,
+            &cfg,
+            &mut report,
+        );
         contacts[0].len = 2; // mark the old ones
         contacts[1].len = 2;
         insert_pairs(
             &mut contacts,
             &[(0, 1), (1, 2), (2, 6), (3, 4), (6, 7)],
             &mut bodies,
+            &cfg,
             &mut report,
         );
         let keys: std::vec::Vec<(u32, u32, u8)> =

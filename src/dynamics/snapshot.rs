@@ -1,6 +1,6 @@
 //! Checksums and snapshots of the world's dynamic state.
 //!
-//! # Format (version 3)
+//! # Format (version 4)
 //! Little-endian throughout, no pointer-sized values:
 //!
 //! | bytes | field |
@@ -14,10 +14,12 @@
 //! | 8 | FNV-1a 64 of the payload (integrity check) |
 //! | … | payload |
 //!
-//! The payload holds the configuration, the step counter, every body slot (generation,
-//! and for a used slot the whole body: shape, pose, velocities, mass, material, flags,
-//! sleep timer, broad-phase box) and the contact cache with its warm-start impulses and
-//! reuse state. What a body's description determines (mass, inertia, centre of mass) is
+//! The payload holds the configuration (its two combine rules last, as `u32` codes in
+//! declaration order: 0 geometric mean, 1 average, 2 min, 3 max, 4 multiply; version 4
+//! added them; an unknown code is `Corrupt`), the step counter, every body slot
+//! (generation, and for a used slot the whole body: shape, pose, velocities, mass,
+//! material, flags, sleep timer, broad-phase box) and the contact cache with its
+//! warm-start impulses and reuse state. What a body's description determines (mass, inertia, centre of mass) is
 //! derived again on restore, exactly as `World::add` derives it, never read; everything
 //! else is bounded, so any snapshot `restore` accepts steps to a finite state. Floats are stored as their bit patterns with `-0.0` canonicalised to `+0.0`.
 //! Hull shapes are stored as a fingerprint (FNV-1a 64 of the hull's data); `restore`
@@ -33,14 +35,14 @@
 
 use super::body::{Body, BodyKind, MassSpec, Material};
 use super::contact::{Contact, ContactPoint};
-use crate::config::WorldConfig;
+use crate::config::{CombineRule, WorldConfig};
 use crate::error::{Error, SnapshotError};
 use crate::math::{Aabb, Iso, Quat, Vec3};
 use crate::shape::{Capsule, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle};
 use crate::World;
 
 /// Snapshot format version; bumped whenever the byte layout changes.
-pub const FORMAT_VERSION: u16 = 3;
+pub const FORMAT_VERSION: u16 = 4;
 
 const MAGIC: [u8; 8] = *b"CAROMSNP";
 const HEADER_LEN: usize = 8 + 2 + 1 + 1 + 12 + 4 + 8;
@@ -272,8 +274,9 @@ fn get_shape<'a>(
     })
 }
 
-/// The configuration's fields in declaration order: (floats, counts, flag).
-fn config_fields(c: &WorldConfig) -> ([f32; 21], [u32; 4], bool) {
+/// The configuration's fields in declaration order: (floats, counts, flag, combine
+/// rules as their codes).
+fn config_fields(c: &WorldConfig) -> ([f32; 21], [u32; 4], bool, [u32; 2]) {
     (
         c.float_fields(),
         [
@@ -283,11 +286,12 @@ fn config_fields(c: &WorldConfig) -> ([f32; 21], [u32; 4], bool) {
             c.position_iterations,
         ],
         c.sleep_enabled,
+        [c.friction_combine.code(), c.restitution_combine.code()],
     )
 }
 
 fn put_config(s: &mut impl Sink, c: &WorldConfig) {
-    let (floats, counts, flag) = config_fields(c);
+    let (floats, counts, flag, rules) = config_fields(c);
     for v in floats {
         s.f32(v);
     }
@@ -295,6 +299,14 @@ fn put_config(s: &mut impl Sink, c: &WorldConfig) {
         s.u32(n);
     }
     s.u8(flag as u8);
+    for code in rules {
+        s.u32(code);
+    }
+}
+
+/// A combine rule read back from its code; an unknown code is `Corrupt`.
+fn get_rule(r: &mut Reader<'_>) -> R<CombineRule> {
+    CombineRule::from_code(r.u32()?).ok_or(SnapshotError::Corrupt)
 }
 
 /// A configuration read back; it must pass [`WorldConfig::validate`].
@@ -335,6 +347,8 @@ fn get_config(r: &mut Reader<'_>) -> R<WorldConfig> {
         hit_event_speed,
         max_linear_speed,
         max_angular_speed,
+        friction_combine: get_rule(r)?,
+        restitution_combine: get_rule(r)?,
     };
     c.validate().map_err(|_| SnapshotError::Corrupt)?;
     Ok(c)
