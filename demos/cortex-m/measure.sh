@@ -18,7 +18,7 @@
 #   instr/step   mean and largest over the timed steps: `minimal`'s 120 steps (one ball
 #                on the ground: World<4, 8, 8>) and, in the full firmware, the 1000 steps
 #                of the `mixed` scene (125 bodies of every shape in a
-#                World<128, 512, 64>); then the same for `tower` (11 bodies), whose run
+#                scenes::ReferenceWorld); then the same for `tower` (11 bodies), whose run
 #                gives the same bits with both backends, so both do the same work
 # Then, per core, the stack each query needs (src/bin/stack_queries.rs, libm): the painted
 # peak of one call of each stateless query and of the steps of a 13-body world.

@@ -95,7 +95,7 @@ fn run_all(hulls: &'static [ConvexHull]) -> Result<Vec<Outcome>, Error> {
         // Worlds are inline and large: on the heap, sized to the scene. The reference
         // scenes run in the world type their golden checksums are defined for.
         let outcome = if scene.body_count() <= 128 {
-            in_new_world::<128, 512, 64>(scene, hulls)?
+            in_new_world::<128, 1024, 64>(scene, hulls)?
         } else if scene.body_count() <= 1024 {
             in_new_world::<1024, 8192, 256>(scene, hulls)?
         } else {
@@ -247,9 +247,8 @@ fn table(outcomes: &[Outcome]) {
     }
     println!(
         "contacts and awake: after the last step; dropped: pairs and contacts that did not fit \
-         the world's pools, over the run\n(the reference scenes run in the golden world type, \
-         `World<128, 512, 64>`: mixed outgrows its 512 contacts, and bodies whose contacts \
-         are dropped sink into each other);\ndeepest: the deepest penetration among the final \
+         the world's pools, over the run (the reference scenes run in the golden world type, \
+         `scenes::ReferenceWorld`);\ndeepest: the deepest penetration among the final \
          state's contacts; top drift: how far the top box ended sideways from where it was \
          built;\n(golden): the checksum in tests/golden, the same on every target."
     );

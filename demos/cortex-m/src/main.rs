@@ -23,7 +23,7 @@
 //! ticks tower 1000 steps total <t> max <m>
 //! ```
 //!
-//! Memory: the world (`ReferenceWorld`, about 540 KB) and its hulls (about 28 KB) live in
+//! Memory: the world (`ReferenceWorld`, about 1.1 MB) and its hulls (about 28 KB) live in
 //! `.bss` statics handed out once by `cortex_m::singleton!`; nothing large is on the stack.
 #![no_std]
 #![no_main]

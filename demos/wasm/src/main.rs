@@ -29,7 +29,7 @@ fn run() -> Result<(), carom::Error> {
     let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
     let mut hulls = vec![placeholder; REFERENCE_HULLS];
     scenes::make_hulls(&mut hulls, SEED)?;
-    // About 540 KB: on the heap, not on wasm's 1 MiB stack.
+    // About 1.1 MB: on the heap, not on wasm's 1 MiB stack.
     let mut world: Box<ReferenceWorld<'_>> = Box::default();
     for scene in Scene::REFERENCE {
         *world = ReferenceWorld::new();
