@@ -50,7 +50,9 @@
 //!   ([`ConvexHull`], borrowed, so many bodies share one), and for static bodies only a
 //!   half-space and a triangle. Shapes are small `Copy` values checked when built.
 //! - **Materials** ([`Material`]): restitution, static and kinetic friction, rolling and
-//!   twist resistance; a contact combines its two bodies' ([`Material::combine`]).
+//!   twist resistance; a contact combines its two bodies' by the world's rules
+//!   ([`WorldConfig::friction_combine`], [`WorldConfig::restitution_combine`]; see
+//!   [`CombineRule`] and [`Material::combine_with`]).
 //! - **Contacts**: made and kept by the step (one manifold of up to four points per
 //!   touching pair, warm-started by feature ids); [`StepReport`] counts them, and the
 //!   stateless [`collide::contact`] computes one for any two posed shapes.

@@ -268,7 +268,7 @@ pub struct ToiInput {
 // ---------------------------------------------------------------------------------------
 
 use carom::props::{BodySpec, HandleRef, ShapeSpec, SnapshotEdit, WorldOp, MAX_HULL_POINTS};
-use carom::{BodyHandle, BodyKind, MassSpec, Material, QueryFilter, WorldConfig};
+use carom::{BodyHandle, BodyKind, CombineRule, MassSpec, Material, QueryFilter, WorldConfig};
 
 /// kg/m³ per step of a tame density: (0, 8192] kg/m³.
 pub const DENSITY_UNIT: f32 = 1.0 / 8.0;
@@ -545,6 +545,23 @@ pub enum ConfigEdit {
     HitEventSpeed(Num),
     /// Speed limits, linear and angular ([`SPEED_UNIT`]).
     SpeedLimits(Num, Num),
+    /// Friction and restitution combine rules, each code modulo the five rules.
+    CombineRules(u8, u8),
+}
+
+/// The combine rule of `code` (modulo the five rules, in declaration order).
+fn combine_rule(code: u8) -> CombineRule {
+    const RULES: [CombineRule; 5] = [
+        CombineRule::GeometricMean,
+        CombineRule::Average,
+        CombineRule::Min,
+        CombineRule::Max,
+        CombineRule::Multiply,
+    ];
+    RULES
+        .get(usize::from(code) % RULES.len())
+        .copied()
+        .unwrap_or(CombineRule::GeometricMean)
 }
 
 /// The default configuration with `edits` applied in order.
@@ -574,6 +591,10 @@ pub fn config(edits: &[ConfigEdit]) -> WorldConfig {
             ConfigEdit::SpeedLimits(l, a) => {
                 c.max_linear_speed = l.value(SPEED_UNIT);
                 c.max_angular_speed = a.value(SPEED_UNIT);
+            }
+            ConfigEdit::CombineRules(f, r) => {
+                c.friction_combine = combine_rule(f);
+                c.restitution_combine = combine_rule(r);
             }
         }
     }

@@ -89,7 +89,7 @@ pub fn is_known_finding(v: &Violation) -> bool {
 /// How far a hit normal's length may be from 1: a few `f32` roundings of a normalisation.
 const NORMAL_SLACK: f32 = 1.0e-3;
 
-/// The snapshot header as documented in `dynamics::snapshot` (version 2; the header layout is the same since version 1), parsed here
+/// The snapshot header as documented in `dynamics::snapshot` (the header layout is the same in every version so far), parsed here
 /// independently of the decoder: magic (8), version (2), backend (1), reserved (1),
 /// capacities (3 × 4), payload length (4), FNV-1a 64 of the payload (8).
 const MAGIC: [u8; 8] = *b"CAROMSNP";
