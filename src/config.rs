@@ -61,6 +61,15 @@ pub enum CombineRule {
 }
 
 impl CombineRule {
+    /// Every rule, in declaration order (the order of their snapshot codes).
+    pub const ALL: [CombineRule; 5] = [
+        CombineRule::GeometricMean,
+        CombineRule::Average,
+        CombineRule::Min,
+        CombineRule::Max,
+        CombineRule::Multiply,
+    ];
+
     /// The rule's code in a snapshot: its declaration index.
     pub(crate) fn code(self) -> u32 {
         match self {
@@ -74,14 +83,8 @@ impl CombineRule {
 
     /// The rule of a snapshot code; `None` for an unknown code.
     pub(crate) fn from_code(code: u32) -> Option<CombineRule> {
-        match code {
-            0 => Some(CombineRule::GeometricMean),
-            1 => Some(CombineRule::Average),
-            2 => Some(CombineRule::Min),
-            3 => Some(CombineRule::Max),
-            4 => Some(CombineRule::Multiply),
-            _ => None,
-        }
+        let index = usize::try_from(code).ok()?;
+        CombineRule::ALL.get(index).copied()
     }
 
     /// Combine the coefficients `a` and `b` (finite, non-negative: a material's) by the

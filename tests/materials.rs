@@ -12,13 +12,7 @@ use carom::{
 
 const G: f32 = 9.81;
 
-const RULES: [CombineRule; 5] = [
-    CombineRule::GeometricMean,
-    CombineRule::Average,
-    CombineRule::Min,
-    CombineRule::Max,
-    CombineRule::Multiply,
-];
+const RULES: [CombineRule; 5] = CombineRule::ALL;
 
 /// Coefficient pairs: zeros, equal values, the extremes a material accepts, and ordinary
 /// friction and restitution values in both orders.

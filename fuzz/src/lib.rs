@@ -551,15 +551,8 @@ pub enum ConfigEdit {
 
 /// The combine rule of `code` (modulo the five rules, in declaration order).
 fn combine_rule(code: u8) -> CombineRule {
-    const RULES: [CombineRule; 5] = [
-        CombineRule::GeometricMean,
-        CombineRule::Average,
-        CombineRule::Min,
-        CombineRule::Max,
-        CombineRule::Multiply,
-    ];
-    RULES
-        .get(usize::from(code) % RULES.len())
+    CombineRule::ALL
+        .get(usize::from(code) % CombineRule::ALL.len())
         .copied()
         .unwrap_or(CombineRule::GeometricMean)
 }
