@@ -6,7 +6,8 @@
 // boxes and fire bullets from it.
 // Test mode, `index.html?scene=mixed&steps=1000&test=1`: load the scene, run exactly
 // `steps` steps synchronously, draw the last frame, write the checksum into #checksum and
-// set the title to `done 0x<checksum>` (`error: ...` on a failure). test.sh reads it.
+// set the title to `done 0x<checksum>` (`error: ...` on a failure), and POST the same
+// outcome to the server's /result, which test.sh waits for.
 "use strict";
 
 const WASM_URL = "pkg/carom_demo_web.wasm";
@@ -475,6 +476,12 @@ function runTest(params) {
   $("checksum").textContent = hex;
   document.title = `done ${hex}`;
   console.log(`carom test: ${name} ${steps} ${hex} in ${ms.toFixed(0)} ms`);
+  reportResult(`${name} ${steps} ${hex} ${ms.toFixed(0)}`);
+}
+
+// Test mode: tell the server (serve.mjs) how the run ended; test.sh reads its log.
+function reportResult(line) {
+  fetch("result", { method: "POST", body: line }).catch((e) => console.error(e));
 }
 
 async function main() {
@@ -494,6 +501,7 @@ async function main() {
     $("error").textContent = String(e && e.message ? e.message : e);
     document.title = `error: ${$("error").textContent}`;
     console.error(e);
+    if (params.get("test") === "1") reportResult(document.title);
   }
 }
 
