@@ -42,6 +42,25 @@
 //! [`EDGE_PARALLEL_SIN`]) are skipped: their axis is rounding noise, and the face axes
 //! next to them carry the contact.
 //!
+//! # Bounds that skip whole faces and edges
+//!
+//! Each shape holds the ball of radius `r` (its centre's least distance to a face plane)
+//! about its centre `c`, so its support along any unit `n` reaches at least `r` past `c`:
+//! `min_B n·y ≤ n·c_B − r_B`. A face of A therefore separates by at most its separation at
+//! B's centre less `r_B`, one product per face; the face with the largest bound is
+//! measured first and a face whose bound is below the best so far is never measured
+//! (`best_face`). An edge pair's axis lies on both edges' arcs, so its separation is at
+//! most `max n·(c_B − p)` over A's arc, less `r_B` (`p` on A's edge), and the same from
+//! B's side: an edge whose bound is below the best face separation takes no part in the
+//! edge loop. Only an edge pair that separates more than the best face can change the
+//! answer, so the result is the full test's, bit for bit (the test
+//! `pruned_query_matches_the_full_test_bit_for_bit` compares them). Edges are pruned only
+//! when every edge of both shapes runs along its faces' crossing line within `10⁻⁵` rad
+//! (a merged, slightly non-planar hull face can break that), with the arc widened for
+//! that tilt, and every bound carries a slack of ten axis-choice tolerances for rounding
+//! and for a hull's vertices lying up to its build tolerance inside its planes. On the
+//! `hulls` scene this halves the test's work.
+//!
 //! Two boxes need no pruning: the arcs of one box's edges along one direction make up the
 //! whole great circle perpendicular to it, so for every pair of edge directions `(i, j)`
 //! exactly one pair of edges spans a face of `D` with a normal towards B, at
@@ -995,7 +1014,7 @@ fn best_face(
 }
 
 /// Largest `|u·n0|`, `|u·n1|` (u the edge's unit vector) for which an edge counts as
-/// well formed: it runs along its faces' crossing line within `10⁻⁴` rad. A hull whose
+/// well formed: it runs along its faces' crossing line within `10⁻⁵` rad. A hull whose
 /// merged face is slightly non-planar can have edges that do not (see
 /// [`support_separation`]); pairs with such a shape are never pruned.
 const WELL_FORMED_SIN: f32 = 1.0e-5;
