@@ -105,6 +105,7 @@ use super::analytic::{feature_at, segment_closest_points};
 use super::clip;
 use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold};
 use crate::math::{scalar, Iso, Mat3, Vec3};
+use crate::shape::EDGE_TILT_SIN;
 use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES, MAX_HULL_FACES};
 
 /// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
@@ -263,6 +264,9 @@ pub(crate) struct PolyEdge {
 pub(crate) trait Polytope {
     /// Number of faces.
     fn face_count(&self) -> usize;
+    /// True when every edge runs along its faces' crossing line within [`EDGE_TILT_SIN`]
+    /// (the condition for pruning edge pairs; see the module docs).
+    fn has_well_formed_edges(&self) -> bool;
     /// Face `f`'s outward unit normal and offset (`n · p = d` on the face).
     fn plane(&self, f: usize) -> (Vec3, f32);
     /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
@@ -372,6 +376,11 @@ fn cuboid_edge_index(i: usize, positive_u: bool, positive_w: bool) -> usize {
 }
 
 impl Polytope for Cuboid {
+    fn has_well_formed_edges(&self) -> bool {
+        // Every edge runs along an axis, both its faces' normals perpendicular to it.
+        true
+    }
+
     fn face_count(&self) -> usize {
         6
     }
@@ -448,6 +457,10 @@ impl Polytope for Cuboid {
 }
 
 impl Polytope for ConvexHull {
+    fn has_well_formed_edges(&self) -> bool {
+        ConvexHull::has_well_formed_edges(self)
+    }
+
     fn face_count(&self) -> usize {
         ConvexHull::face_count(self)
     }
@@ -823,17 +836,16 @@ fn query_with<A: Polytope, B: Polytope>(
     // `edge_bound`): only an edge pair that separates more than the best face can end
     // the test, win the axis choice or raise the exact separation.
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
-    let prune = prune && r_a > 0.0 && r_b > 0.0 && edges_well_formed(a);
+    let prune =
+        prune && r_a > 0.0 && r_b > 0.0 && a.has_well_formed_edges() && b.has_well_formed_edges();
     let center_a_in_b = fr.inv_vector(center_a - fr.t);
     // B's edges once: index, vector (B's frame), start and vector in A's frame, faces.
     let mut edges_b: heapless::Vec<EdgeB, MAX_HULL_EDGES> = heapless::Vec::new();
-    let mut well_formed_b = true;
     for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
         let (Some(e), Some((f0, f1))) = (b.edge(ib), b.edge_faces(ib)) else {
             continue;
         };
         let vector = e.p1 - e.p0;
-        well_formed_b &= edge_well_formed(&e);
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
         let bound = edge_bound(&e, center_a_in_b) - r_a + slack;
         // Cannot be full: at most MAX_HULL_EDGES edges.
@@ -845,7 +857,6 @@ fn query_with<A: Polytope, B: Polytope>(
             bound,
         });
     }
-    let prune = prune && well_formed_b;
     if prune {
         // A NaN on either side compares unordered: the edge is kept.
         edges_b.retain(|e| e.bound.partial_cmp(&best_face_separation) != Some(Ordering::Less));
@@ -1013,30 +1024,11 @@ fn best_face(
     Ok(best)
 }
 
-/// Largest `|u·n0|`, `|u·n1|` (u the edge's unit vector) for which an edge counts as
-/// well formed: it runs along its faces' crossing line within `10⁻⁵` rad. A hull whose
-/// merged face is slightly non-planar can have edges that do not (see
-/// [`support_separation`]); pairs with such a shape are never pruned.
-const WELL_FORMED_SIN: f32 = 1.0e-5;
-
-/// How far (rad) an edge pair's axis can lie outside the arc of a well-formed edge: the
-/// edge's tilt `WELL_FORMED_SIN` is turned into an angle on the Gauss map by at most
-/// `1 / EDGE_PARALLEL_SIN` (the pair's edges are at least that far from parallel).
-const ARC_WIDENING: f32 = 2.0 * WELL_FORMED_SIN / EDGE_PARALLEL_SIN;
-
-/// True when the edge runs along its faces' crossing line ([`WELL_FORMED_SIN`]).
-#[inline]
-fn edge_well_formed(e: &PolyEdge) -> bool {
-    let v = e.p1 - e.p0;
-    let limit = WELL_FORMED_SIN * v.length();
-    // False for NaN: not well formed.
-    scalar::abs(v.dot(e.n0)) <= limit && scalar::abs(v.dot(e.n1)) <= limit
-}
-
-/// True when every edge of `p` is well formed.
-fn edges_well_formed<P: Polytope>(p: &P) -> bool {
-    (0..p.edge_count()).all(|e| p.edge(e).is_some_and(|e| edge_well_formed(&e)))
-}
+/// How far (rad) an edge pair's axis can lie outside the arc of a well-formed edge
+/// (tilted at most [`EDGE_TILT_SIN`] from its faces' crossing line): the tilt is turned
+/// into an angle on the Gauss map by at most `1 / EDGE_PARALLEL_SIN` (the pair's edges are
+/// at least that far from parallel), doubled for rounding.
+const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
 
 /// `max n · w` over the unit vectors `n` on the edge's arc of the Gauss map (the short
 /// great-circle arc from `n0` to `n1`), widened by [`ARC_WIDENING`], with `w` the vector
@@ -1055,6 +1047,13 @@ fn edges_well_formed<P: Polytope>(p: &P) -> bool {
 fn edge_bound(e: &PolyEdge, c: Vec3) -> f32 {
     let w = c - e.p0;
     let w_len = w.length();
+    let (dot0, dot1) = (e.n0.dot(w), e.n1.dot(w));
+    // Both ends turned away from `w`: any `n = (α n0 + β n1) / |α n0 + β n1|` on the arc
+    // (α, β ≥ 0, and the length at most α + β) gives `n · w ≤ (α dot0 + β dot1) / (α + β)`,
+    // at most the larger end. The usual case: an edge on the far side.
+    if dot0 <= 0.0 && dot1 <= 0.0 {
+        return scalar::max(dot0, dot1) + ARC_WIDENING * w_len;
+    }
     let k = e.n0.cross(e.n1);
     let kk = k.length_squared();
     // Nearly equal or opposite normals: no arc to speak of, bound by |w|.
@@ -1068,7 +1067,7 @@ fn edge_bound(e: &PolyEdge, c: Vec3) -> f32 {
     let on_arc = if inside {
         wp.length()
     } else {
-        scalar::max(e.n0.dot(w), e.n1.dot(w))
+        scalar::max(dot0, dot1)
     };
     on_arc + ARC_WIDENING * w_len
 }
@@ -2073,7 +2072,7 @@ mod tests {
     fn pruned_query_matches_the_full_test_bit_for_bit() {
         let mut rng = SplitMix64::new(14);
         let boxed = Cuboid::new(Vec3::new(0.5, 0.2, 0.35)).unwrap();
-        let (mut separated, mut overlapping, mut edge_wins) = (0, 0, 0);
+        let (mut separated, mut overlapping, mut edge_wins, mut edges_pruned) = (0, 0, 0, 0);
         for round in 0..300 {
             let hull = |rng: &mut SplitMix64| {
                 let count = 4 + (rng.next_u64() % 28) as usize;
@@ -2091,6 +2090,8 @@ mod tests {
                 ConvexHull::new(&pts).unwrap()
             };
             let (a, b) = (hull(&mut rng), hull(&mut rng));
+            // Edge pairs are pruned only between hulls with well-formed edges.
+            edges_pruned += usize::from(a.has_well_formed_edges() && b.has_well_formed_edges());
             for _ in 0..40 {
                 let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 2.5), rng.rotation());
                 let fr = Frame::new(&b_in_a);
@@ -2114,10 +2115,11 @@ mod tests {
                 assert_eq!(pruned, full, "box-hull pair, round {round}, {b_in_a:?}");
             }
         }
-        // Every kind of outcome was compared, edge pairs winning included.
+        // Every kind of outcome was compared, edge pairs winning included, and most hull
+        // pairs had their edges pruned.
         assert!(
-            separated > 1000 && overlapping > 1000 && edge_wins > 100,
-            "{separated} {overlapping} {edge_wins}"
+            separated > 1000 && overlapping > 1000 && edge_wins > 100 && edges_pruned > 150,
+            "{separated} {overlapping} {edge_wins} {edges_pruned}"
         );
     }
 

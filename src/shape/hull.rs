@@ -88,7 +88,16 @@ pub struct ConvexHull {
     /// Thinnest width (m), computed once at build ([`ConvexHull::min_extent`]): the
     /// continuous-collision test asks for it for every body every step.
     pub(crate) thinnest: f32,
+    /// True when every edge runs along its two faces' crossing line within
+    /// [`EDGE_TILT_SIN`], computed once at build: the separating axis test prunes edge
+    /// pairs only between such shapes.
+    pub(crate) well_formed_edges: bool,
 }
+
+/// Largest `|u · n|` (u an edge's unit vector, n the normal of a face beside it) for
+/// which a hull edge counts as running along its faces' crossing line. A merged, slightly
+/// non-planar face can leave edges tilted more than that.
+pub(crate) const EDGE_TILT_SIN: f32 = 1.0e-5;
 
 /// One edge of a hull between two faces that are not coplanar: its end vertices
 /// `v0 < v1` and the faces on either side. `face0` runs along `v0 → v1` counter-clockwise
@@ -124,6 +133,7 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     tolerance: 0.0,
     reduced: false,
     thinnest: 0.0,
+    well_formed_edges: false,
 };
 
 impl ConvexHull {
@@ -273,6 +283,25 @@ impl ConvexHull {
             v1,
             face0,
             face1,
+        })
+    }
+
+    /// True when every edge runs along its faces' crossing line ([`EDGE_TILT_SIN`]).
+    pub(crate) fn has_well_formed_edges(&self) -> bool {
+        self.well_formed_edges
+    }
+
+    /// [`ConvexHull::has_well_formed_edges`], measured: `|v · n0|` and `|v · n1|` at most
+    /// `EDGE_TILT_SIN |v|` for every edge vector `v` (false for NaN).
+    fn edges_run_along_faces(&self) -> bool {
+        (0..self.edge_count()).all(|e| {
+            self.edge(e).is_some_and(|h| {
+                let v = self.core_vertex(u32::from(h.v1)) - self.core_vertex(u32::from(h.v0));
+                let limit = EDGE_TILT_SIN * v.length();
+                let n0 = self.plane(usize::from(h.face0)).0;
+                let n1 = self.plane(usize::from(h.face1)).0;
+                scalar::abs(v.dot(n0)) <= limit && scalar::abs(v.dot(n1)) <= limit
+            })
         })
     }
 
@@ -1453,6 +1482,7 @@ impl<'p> Builder<'p> {
             .ok_or(Error::Hull(HullError::Coplanar))?;
         hull.centroid = centroid;
         hull.thinnest = hull.thinnest_width();
+        hull.well_formed_edges = hull.edges_run_along_faces();
         Ok(hull)
     }
 

@@ -15,6 +15,7 @@ mod triangle;
 
 pub use capsule::Capsule;
 pub use cuboid::Cuboid;
+pub(crate) use hull::EDGE_TILT_SIN;
 pub use hull::{
     ConvexHull, MAX_HULL_EDGES, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES,
 };
