@@ -99,8 +99,6 @@
 //! Everything runs in A's frame with B's rotation as a matrix; loops are bounded by the
 //! shapes' face and edge counts; no allocation, no arrays but the clipping buffers.
 
-use core::cmp::Ordering;
-
 use super::analytic::{feature_at, segment_closest_points};
 use super::clip;
 use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold};
@@ -766,8 +764,6 @@ struct EdgeB {
     placed: (Vec3, Vec3),
     /// The faces on either side.
     faces: (u8, u8),
-    /// An upper bound of the separation of any edge pair with this edge ([`edge_bound`]).
-    bound: f32,
 }
 
 /// The full test: `Err(axis)` when `axis` separates the shapes by more than `margin`, else
@@ -847,19 +843,16 @@ fn query_with<A: Polytope, B: Polytope>(
         };
         let vector = e.p1 - e.p0;
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
-        let bound = edge_bound(&e, center_a_in_b) - r_a + slack;
+        if prune && edge_bound(&e, center_a_in_b) - r_a + slack < best_face_separation {
+            continue;
+        }
         // Cannot be full: at most MAX_HULL_EDGES edges.
         let _ = edges_b.push(EdgeB {
             index: ib as u8,
             vector,
             placed: (fr.point(e.p0), fr.vector(vector)),
             faces: (f0 as u8, f1 as u8),
-            bound,
         });
-    }
-    if prune {
-        // A NaN on either side compares unordered: the edge is kept.
-        edges_b.retain(|e| e.bound.partial_cmp(&best_face_separation) != Some(Ordering::Less));
     }
     // B's face normals dotted with the current A edge (B's frame): the first triple
     // product of every B edge is a look-up, and most pairs stop there. The pairs that
@@ -969,18 +962,17 @@ fn best_face(
     margin: f32,
     slack: f32,
 ) -> Result<FaceBest, usize> {
-    let mut bounds = [f32::INFINITY; MAX_HULL_FACES];
+    // The bounds are computed again where needed rather than kept in a table: a table
+    // sized for the largest hull would add half a kibibyte to the stack of every contact.
+    let bound_of = |f: usize| bound(f) + slack;
     let mut first = 0usize;
     let mut first_bound = f32::NEG_INFINITY;
-    for (f, slot) in bounds.iter_mut().enumerate().take(count) {
-        let u = bound(f) + slack;
-        *slot = u;
+    for f in 0..count {
+        let u = bound_of(f);
         if u > first_bound {
             (first, first_bound) = (f, u);
         }
     }
-    // A face beyond the table (never for carom's shapes) has no bound: always measured.
-    let bound_of = |f: usize| bounds.get(f).copied().unwrap_or(f32::INFINITY);
     let mut best = FaceBest {
         index: 0,
         separation: f32::NEG_INFINITY,
