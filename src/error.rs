@@ -67,6 +67,13 @@ pub enum Input {
     /// A configuration value not listed above (a [`crate::WorldConfig`] field, a scene
     /// that needs hulls it was not given).
     Config,
+    /// A vertex index of a mesh triangle ([`crate::shape::TriangleMesh::build`]): one not
+    /// below the number of vertices is [`Error::OutOfRange`].
+    Index,
+    /// The number of triangles of a mesh ([`crate::shape::TriangleMesh::build`]): none is
+    /// [`Error::NotPositive`], more than [`crate::shape::MAX_MESH_TRIANGLES`]
+    /// [`Error::OutOfRange`].
+    TriangleCount,
 }
 
 /// Which fixed-capacity pool an [`Error::PoolFull`] is about.
@@ -150,7 +157,8 @@ pub enum Error {
     PoolFull(Pool),
     /// A caller-provided buffer is too small; the value is the length needed:
     /// [`crate::World::snapshot`] into a buffer shorter than
-    /// [`crate::World::snapshot_len`].
+    /// [`crate::World::snapshot_len`] (bytes), [`crate::shape::TriangleMesh::build`] into
+    /// node storage shorter than [`crate::shape::TriangleMesh::nodes_needed`] (nodes).
     BufferTooSmall(u32),
     /// A snapshot is truncated, corrupt or from an incompatible build:
     /// [`crate::World::restore`] and [`crate::World::restore_with_hulls`]; the
@@ -195,7 +203,7 @@ impl core::fmt::Display for Error {
             Error::StaticOnly => write!(f, "the shape is for static bodies only"),
             Error::StaleHandle => write!(f, "stale body handle"),
             Error::PoolFull(p) => write!(f, "{p:?} pool is full"),
-            Error::BufferTooSmall(n) => write!(f, "buffer too small, {n} bytes needed"),
+            Error::BufferTooSmall(n) => write!(f, "buffer too small, {n} elements needed"),
             Error::Snapshot(s) => write!(f, "snapshot refused: {s:?}"),
         }
     }

@@ -9,6 +9,7 @@
 mod capsule;
 mod cuboid;
 mod hull;
+mod mesh;
 mod plane;
 mod sphere;
 mod triangle;
@@ -19,6 +20,7 @@ pub(crate) use hull::EDGE_TILT_SIN;
 pub use hull::{
     ConvexHull, MAX_HULL_EDGES, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES,
 };
+pub use mesh::{BvhNode, TriangleMesh, MAX_BVH_DEPTH, MAX_MESH_TRIANGLES};
 pub use plane::HalfSpace;
 pub use sphere::Sphere;
 pub use triangle::Triangle;
