@@ -829,7 +829,7 @@ fn query_with<A: Polytope, B: Polytope>(
     let centers = (center_a, fr.point(center_b));
     let mut edge: Option<EdgeBest> = None;
     // Edge pairs that cannot beat the best face are skipped a whole edge at a time (see
-    // `edge_bound`): only an edge pair that separates more than the best face can end
+    // `edge_below`): only an edge pair that separates more than the best face can end
     // the test, win the axis choice or raise the exact separation.
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
     let prune =
@@ -843,7 +843,7 @@ fn query_with<A: Polytope, B: Polytope>(
         };
         let vector = e.p1 - e.p0;
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
-        if prune && edge_bound(&e, center_a_in_b) - r_a + slack < best_face_separation {
+        if prune && edge_below(&e, center_a_in_b, best_face_separation + r_a - slack) {
             continue;
         }
         // Cannot be full: at most MAX_HULL_EDGES edges.
@@ -869,7 +869,7 @@ fn query_with<A: Polytope, B: Polytope>(
     for ia in 0..a.edge_count() {
         let Some(ea) = a.edge(ia) else { continue };
         // A supports along `n`, so `n` is on A's arc: `s ≤ n·(c_B − p) − r_B`.
-        if prune && edge_bound(&ea, centers.1) - r_b + slack < best_face_separation {
+        if prune && edge_below(&ea, centers.1, best_face_separation + r_b - slack) {
             continue;
         }
         let arc = ArcA::new(ea, fr);
@@ -1022,46 +1022,49 @@ fn best_face(
 /// at least that far from parallel), doubled for rounding.
 const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
 
-/// `max n · w` over the unit vectors `n` on the edge's arc of the Gauss map (the short
-/// great-circle arc from `n0` to `n1`), widened by [`ARC_WIDENING`], with `w` the vector
-/// from the edge's start to the other shape's centre: an upper bound of `n · (c − p)` for
-/// the axis `n` of any edge pair this edge is part of (the edge supports its shape along
-/// `n`, so `n · p` is the same at both ends).
+/// True when no edge pair with this edge can separate the shapes by `threshold` or more:
+/// `max n · w < threshold` over the unit vectors `n` on the edge's arc of the Gauss map
+/// (the short great-circle arc from `n0` to `n1`), widened by [`ARC_WIDENING`], with `w`
+/// the vector from the edge's start to the other shape's centre. That maximum bounds
+/// `n · (c − p)` for the axis `n` of any edge pair this edge is part of (the edge supports
+/// its shape along `n`, so `n · p` is the same at both ends); with the other shape holding
+/// the ball of radius `r` about `c`, the pair's separation is at most that less `r`, so
+/// the caller passes `threshold = best face separation + r − slack`.
 ///
-/// With the other shape holding the ball of radius `r` about `c`, the pair's separation is
-/// at most `n·(c − p) − r`; an edge whose bound is below the best face's separation never
-/// matters. Edge pairs are only pruned when both shapes' edges are well formed, since the
+/// Edge pairs are only pruned when both shapes' edges are well formed, since the
 /// Gauss-map test then puts the axis on both arcs (within the widening): the centre rule
 /// of [`edge_axis`] cannot pick the antipode, which would give `n · (p − c) < 0` on a
 /// shape whose arc holds `−n`, while every normal on its arc gives at least its inner
 /// radius.
 #[inline]
-fn edge_bound(e: &PolyEdge, c: Vec3) -> f32 {
+fn edge_below(e: &PolyEdge, c: Vec3, threshold: f32) -> bool {
     let w = c - e.p0;
-    let w_len = w.length();
     let (dot0, dot1) = (e.n0.dot(w), e.n1.dot(w));
+    let ends = scalar::max(dot0, dot1);
+    // The ends are on the arc: the maximum is at least theirs. The usual case for an edge
+    // on the near side, decided without a square root.
+    if ends >= threshold {
+        return false;
+    }
+    let w_len = w.length();
     // Both ends turned away from `w`: any `n = (α n0 + β n1) / |α n0 + β n1|` on the arc
-    // (α, β ≥ 0, and the length at most α + β) gives `n · w ≤ (α dot0 + β dot1) / (α + β)`,
-    // at most the larger end. The usual case: an edge on the far side.
+    // (α, β ≥ 0, the length at most α + β) gives `n · w ≤ (α dot0 + β dot1) / (α + β)`,
+    // at most the larger end. The usual case for an edge on the far side.
     if dot0 <= 0.0 && dot1 <= 0.0 {
-        return scalar::max(dot0, dot1) + ARC_WIDENING * w_len;
+        return ends + ARC_WIDENING * w_len < threshold;
     }
     let k = e.n0.cross(e.n1);
     let kk = k.length_squared();
     // Nearly equal or opposite normals: no arc to speak of, bound by |w|.
     if kk.is_nan() || kk <= 1.0e-8 {
-        return w_len;
+        return w_len + ARC_WIDENING * w_len < threshold;
     }
     // `w` projected on the arc's plane; the arc holds its direction when it lies between
     // `n0` and `n1` (turning about `k`).
     let wp = w - k * (w.dot(k) / kk);
     let inside = e.n0.cross(wp).dot(k) >= 0.0 && wp.cross(e.n1).dot(k) >= 0.0;
-    let on_arc = if inside {
-        wp.length()
-    } else {
-        scalar::max(dot0, dot1)
-    };
-    on_arc + ARC_WIDENING * w_len
+    let on_arc = if inside { wp.length() } else { ends };
+    on_arc + ARC_WIDENING * w_len < threshold
 }
 
 /// True when the cached axis, computed exactly as [`query`] computes it, separates the
