@@ -292,29 +292,15 @@ impl<'a> TriangleMesh<'a> {
     /// [`TriangleMesh::build`] cannot exceed (see [`MAX_BVH_DEPTH`]); were it ever full,
     /// the walk would stop early rather than panic.
     pub fn query_aabb(&self, aabb: &Aabb, mut f: impl FnMut(u32)) {
-        let mut stack = [0u32; STACK];
-        let mut len = 1;
-        // Each node is pushed at most once (a tree): at most `nodes.len()` pops.
-        for _ in 0..self.nodes.len() {
-            if len == 0 {
-                return;
-            }
-            len -= 1;
-            let Some(node) = stack.get(len).and_then(|&i| self.nodes.get(i as usize)) else {
-                continue;
-            };
+        self.walk(|node| {
             if !node.aabb.overlaps(aabb) {
-                continue;
+                return false;
             }
-            match node.children() {
-                None => f(node.second),
-                Some((left, right)) => {
-                    if !push2(&mut stack, &mut len, right, left) {
-                        return;
-                    }
-                }
+            if node.children().is_none() {
+                f(node.second);
             }
-        }
+            true
+        });
     }
 
     /// The nearest point where `ray` meets a triangle within `max_t` metres, and that
@@ -333,42 +319,54 @@ impl<'a> TriangleMesh<'a> {
         }
         let origin_size = ray.origin.abs().max_elem();
         let mut best: Option<(u32, RayHit)> = None;
+        self.walk(|node| {
+            let limit = best.map_or(max_t, |(_, h)| h.t);
+            if node.children().is_some() {
+                return ray_meets_box(ray, &node.aabb, origin_size, limit);
+            }
+            if let Some(hit) = self
+                .triangle(node.second)
+                .and_then(|t| t.cast_ray(ray, max_t))
+            {
+                let better = match best {
+                    None => true,
+                    Some((i, b)) => hit.t < b.t || (hit.t == b.t && node.second < i),
+                };
+                if better {
+                    best = Some((node.second, hit));
+                }
+            }
+            false
+        });
+        best
+    }
+
+    /// The tree walk both queries share: depth-first from the root, left child first,
+    /// calling `visit` on every node reached; an inner node's children are reached when
+    /// `visit` returns true. The stack holds [`MAX_BVH_DEPTH`]` + 1` entries, which a tree
+    /// from [`TriangleMesh::build`] cannot exceed; were it ever full, the walk would stop
+    /// early rather than panic. Each node is pushed at most once (a tree), so the loop
+    /// needs at most `nodes.len()` pops.
+    fn walk(&self, mut visit: impl FnMut(&BvhNode) -> bool) {
         let mut stack = [0u32; STACK];
         let mut len = 1;
         for _ in 0..self.nodes.len() {
             if len == 0 {
-                break;
+                return;
             }
             len -= 1;
             let Some(node) = stack.get(len).and_then(|&i| self.nodes.get(i as usize)) else {
                 continue;
             };
-            let limit = best.map_or(max_t, |(_, h)| h.t);
-            match node.children() {
-                None => {
-                    let Some(tri) = self.triangle(node.second) else {
-                        continue;
-                    };
-                    if let Some(hit) = tri.cast_ray(ray, max_t) {
-                        let better = match best {
-                            None => true,
-                            Some((i, b)) => hit.t < b.t || (hit.t == b.t && node.second < i),
-                        };
-                        if better {
-                            best = Some((node.second, hit));
-                        }
-                    }
-                }
-                Some((left, right)) => {
-                    if ray_meets_box(ray, &node.aabb, origin_size, limit)
-                        && !push2(&mut stack, &mut len, right, left)
-                    {
-                        break;
-                    }
+            if !visit(node) {
+                continue;
+            }
+            if let Some((left, right)) = node.children() {
+                if !push2(&mut stack, &mut len, right, left) {
+                    return;
                 }
             }
         }
-        best
     }
 }
 
