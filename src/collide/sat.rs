@@ -265,6 +265,9 @@ pub(crate) trait Polytope {
     /// True when every edge runs along its faces' crossing line within [`EDGE_TILT_SIN`]
     /// (the condition for pruning edge pairs; see the module docs).
     fn has_well_formed_edges(&self) -> bool;
+    /// The radius (m) of a ball about [`Polytope::center`] inside the polytope (0 when
+    /// there is none): the bounds of the module docs' pruning.
+    fn inner_radius(&self) -> f32;
     /// Face `f`'s outward unit normal and offset (`n · p = d` on the face).
     fn plane(&self, f: usize) -> (Vec3, f32);
     /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
@@ -379,6 +382,11 @@ impl Polytope for Cuboid {
         true
     }
 
+    fn inner_radius(&self) -> f32 {
+        // The centre is the origin; the nearest faces are at the smallest half-extent.
+        self.half_extents.min_elem()
+    }
+
     fn face_count(&self) -> usize {
         6
     }
@@ -457,6 +465,10 @@ impl Polytope for Cuboid {
 impl Polytope for ConvexHull {
     fn has_well_formed_edges(&self) -> bool {
         ConvexHull::has_well_formed_edges(self)
+    }
+
+    fn inner_radius(&self) -> f32 {
+        ConvexHull::inner_radius(self)
     }
 
     fn face_count(&self) -> usize {
@@ -800,7 +812,7 @@ fn query_with<A: Polytope, B: Polytope>(
         f32::INFINITY
     };
     let (center_a, center_b) = (a.center(), b.center());
-    let (r_a, r_b) = (inner_radius(a), inner_radius(b));
+    let (r_a, r_b) = (a.inner_radius(), b.inner_radius());
     // Face f of A: `s_f = min_B n_B·y + n·t − d ≤ n_B·c_B − r_B + n·t − d`.
     let face_a = best_face(
         a.face_count(),
@@ -923,24 +935,6 @@ fn query_with<A: Polytope, B: Polytope>(
 /// lying up to its build tolerance inside its face planes (which shrinks the ball the
 /// bound assumes). Rounding is about `10⁻⁶` of the same scale, a hull's tolerance `10⁻⁵`.
 const PRUNE_SLACK: f32 = 10.0;
-
-/// The radius (m) of a ball about [`Polytope::center`] inside the polytope: the centre's
-/// least distance to a face plane, 0 when that is negative (a flat hull).
-#[inline]
-fn inner_radius<P: Polytope>(p: &P) -> f32 {
-    let c = p.center();
-    let mut r = f32::INFINITY;
-    for f in 0..p.face_count() {
-        let (n, d) = p.plane(f);
-        r = scalar::min(r, d - n.dot(c));
-    }
-    // NaN or negative: no ball, the bound falls back to the centre itself.
-    if r > 0.0 {
-        r
-    } else {
-        0.0
-    }
-}
 
 /// The best (largest) of `count` face separations `separation(f)`, ties to the lowest
 /// index, or `Err(f)` for the first face in index order that separates by more than

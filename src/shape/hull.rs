@@ -92,6 +92,10 @@ pub struct ConvexHull {
     /// [`EDGE_TILT_SIN`], computed once at build: the separating axis test prunes edge
     /// pairs only between such shapes.
     pub(crate) well_formed_edges: bool,
+    /// The centroid's least distance to a face plane (m), 0 if that is not positive,
+    /// computed once at build: the radius of a ball about the centroid inside the hull,
+    /// which the separating axis test's bounds use on every query.
+    pub(crate) inner_radius: f32,
 }
 
 /// Largest `|u · n|` (u an edge's unit vector, n the normal of a face beside it) for
@@ -134,6 +138,7 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     reduced: false,
     thinnest: 0.0,
     well_formed_edges: false,
+    inner_radius: 0.0,
 };
 
 impl ConvexHull {
@@ -284,6 +289,25 @@ impl ConvexHull {
             face0,
             face1,
         })
+    }
+
+    /// The radius (m) of a ball about the centroid inside the hull, computed at build.
+    pub(crate) fn inner_radius(&self) -> f32 {
+        self.inner_radius
+    }
+
+    /// The centroid's least distance to a face plane, 0 when that is negative or NaN.
+    fn centroid_depth(&self) -> f32 {
+        let mut r = f32::INFINITY;
+        for f in 0..self.face_count() {
+            let (n, d) = self.plane(f);
+            r = scalar::min(r, d - n.dot(self.centroid));
+        }
+        if r > 0.0 {
+            r
+        } else {
+            0.0
+        }
     }
 
     /// True when every edge runs along its faces' crossing line ([`EDGE_TILT_SIN`]).
@@ -1483,6 +1507,7 @@ impl<'p> Builder<'p> {
         hull.centroid = centroid;
         hull.thinnest = hull.thinnest_width();
         hull.well_formed_edges = hull.edges_run_along_faces();
+        hull.inner_radius = hull.centroid_depth();
         Ok(hull)
     }
 
