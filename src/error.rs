@@ -74,6 +74,13 @@ pub enum Input {
     /// [`Error::NotPositive`], more than [`crate::shape::MAX_MESH_TRIANGLES`]
     /// [`Error::OutOfRange`].
     TriangleCount,
+    /// A part of a compound ([`crate::shape::Compound::new`]): a shape that cannot be a
+    /// part (not a convex solid) is [`Error::OutOfRange`].
+    Part,
+    /// The number of parts of a compound ([`crate::shape::Compound::new`]): none is
+    /// [`Error::NotPositive`], more than [`crate::shape::MAX_COMPOUND_PARTS`]
+    /// [`Error::OutOfRange`].
+    PartCount,
 }
 
 /// Which fixed-capacity pool an [`Error::PoolFull`] is about.
@@ -160,6 +167,11 @@ pub enum Error {
     /// [`crate::World::snapshot_len`] (bytes), [`crate::shape::TriangleMesh::build`] into
     /// node storage shorter than [`crate::shape::TriangleMesh::nodes_needed`] (nodes).
     BufferTooSmall(u32),
+    /// A query that takes one convex shape ([`crate::collide::contact`],
+    /// [`crate::collide::distance`], [`crate::collide::penetration`],
+    /// [`crate::collide::separation`], [`crate::collide::time_of_impact`] and their kin)
+    /// was given a triangle mesh or a compound: query their parts instead.
+    NotConvex,
     /// A snapshot is truncated, corrupt or from an incompatible build:
     /// [`crate::World::restore`] and [`crate::World::restore_with_hulls`]; the
     /// [`SnapshotError`] says why, and the world is unchanged.
@@ -188,6 +200,9 @@ pub enum SnapshotError {
     /// A body's hull shape was not found among the hulls given to restore
     /// (plain [`crate::World::restore`] looks among the hulls its bodies use now).
     MissingHull,
+    /// A body's mesh or compound was not found among the shapes the world's bodies use
+    /// now (restore a world that holds the same level geometry and compounds).
+    MissingShape,
 }
 
 impl core::fmt::Display for Error {
@@ -204,6 +219,7 @@ impl core::fmt::Display for Error {
             Error::StaleHandle => write!(f, "stale body handle"),
             Error::PoolFull(p) => write!(f, "{p:?} pool is full"),
             Error::BufferTooSmall(n) => write!(f, "buffer too small, {n} elements needed"),
+            Error::NotConvex => write!(f, "a mesh or compound where one convex shape is needed"),
             Error::Snapshot(s) => write!(f, "snapshot refused: {s:?}"),
         }
     }

@@ -10,7 +10,7 @@ use crate::dynamics::events::{Event, StepReport};
 use crate::dynamics::pool::{BodyHandle, Pool};
 use crate::dynamics::snapshot::{Stage, StepTrace};
 use crate::dynamics::solver::{self, Solver};
-use crate::dynamics::{ccd, projection, sleep};
+use crate::dynamics::{ccd, mid_phase, projection, sleep};
 use crate::error::{finite_vec, Error, Input, Pool as PoolKind};
 use crate::math::{Iso, Quat, Vec3};
 use crate::shape::Shape;
@@ -18,7 +18,7 @@ use crate::shape::Shape;
 /// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
 /// many candidate pairs per step) and `EVENTS` events per step.
 ///
-/// Everything lives inline: no heap. A world is large (588 bytes per body slot and 1064
+/// Everything lives inline: no heap. A world is large (588 bytes per body slot and 1072
 /// per contact slot on 64-bit hosts, README "Capacity"), so where it lives matters:
 ///
 /// - In a `static`: `World::new` is a `const fn`, so the compiler builds the world and
@@ -173,7 +173,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             .find_new_pairs(bodies, contacts, pairs, &mut report);
         contact::insert_pairs(contacts, pairs, bodies, &cfg, &mut report);
         self.trace(&mut trace, Stage::BroadPhase);
-        // 4 mid phase: every shape is one convex part, so a pair is one part pair.
+        // 4 mid phase: the part pairs of meshes and compounds that may touch
+        mid_phase::update_parts(&mut self.contacts, &self.bodies, &mut report);
         // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
         let events = &mut self.events;
         contact::update_contacts(&mut self.contacts, &self.bodies, &cfg, events, &mut report);

@@ -516,7 +516,8 @@ pub(crate) fn half_space_contact(
         }
     };
     match b {
-        Shape::HalfSpace(_) => return None,
+        // Half-spaces never touch; meshes and compounds never reach the narrow phase.
+        Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::Compound(_) => return None,
         Shape::Sphere(_) => add(Vec3::ZERO, 0),
         Shape::Capsule(c) => {
             let (s0, s1) = c.segment();

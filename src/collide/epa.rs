@@ -140,6 +140,8 @@ pub fn penetration(
 ) -> Result<Option<Penetration>, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
     let placement = Placement::between(pose_a, pose_b);
     Ok(
         penetration_placed(a, b, &placement, EpaCaps::DEFAULT).map(|p| {

@@ -173,6 +173,8 @@ pub fn distance(
 ) -> Result<DistanceOutput, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
     let placement = Placement::between(pose_a, pose_b);
     let out = distance_placed(a, b, &placement, cache, MAX_GJK_ITERATIONS);
     let world = DistanceOutput {

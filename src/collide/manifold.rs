@@ -184,6 +184,8 @@ pub fn contact_cached(
 ) -> Result<Option<Manifold>, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
     non_negative(margin, Input::Distance)?;
     // Built where it is returned: a manifold is about 256 bytes, and copying it into the
     // result cost a fifth of a sphere-box query.
@@ -211,6 +213,8 @@ pub fn contact_gjk_epa(
 ) -> Result<Option<Manifold>, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
     non_negative(margin, Input::Distance)?;
     let mut m = Manifold::default();
     let found = dispatch(a, pose_a, b, pose_b, margin, Route::General, &mut m);
@@ -412,6 +416,8 @@ fn order_rank(s: &Shape) -> u8 {
         Shape::Sphere(_) => 1,
         Shape::Capsule(_) => 2,
         Shape::Cuboid(_) | Shape::Hull(_) | Shape::Triangle(_) => 3,
+        // Never in the narrow phase (its doors refuse them); ranked last to stay total.
+        Shape::Mesh(_) | Shape::Compound(_) => 4,
     }
 }
 
@@ -526,6 +532,8 @@ fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
         Shape::Sphere(_) => 3,
         Shape::Capsule(_) => 4,
         Shape::HalfSpace(_) => 5,
+        Shape::Mesh(_) => 6,
+        Shape::Compound(_) => 7,
     };
     let vec = |u: Vec3, v: Vec3| {
         u.x.total_cmp(&v.x)

@@ -73,6 +73,8 @@ pub struct Separation {
 pub fn separation(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Result<Separation, Error> {
     check_pose(pose_a)?;
     check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
     let placement = Placement::between(pose_a, pose_b);
     let (local, from_penetration) = separation_placed(a, b, &placement);
     let normal = pose_a.transform_vector(local.normal);

@@ -175,6 +175,8 @@ pub fn time_of_impact(
     }
     positive(t_max, Input::Time)?;
     positive(tolerance, Input::Distance)?;
+    a.check_convex()?;
+    b.check_convex()?;
     Ok(time_of_impact_unchecked(
         a, motion_a, b, motion_b, t_max, tolerance,
     ))

@@ -401,6 +401,8 @@ pub(crate) fn check_shape(shape: &Shape<'_>) -> Result<(), Error> {
         }
         // Hulls can only come from `ConvexHull::new`, which validated them.
         Shape::Hull(_) => Ok(()),
+        // Meshes and compounds have private fields: their constructors checked them.
+        Shape::Mesh(_) | Shape::Compound(_) => Ok(()),
     }
 }
 

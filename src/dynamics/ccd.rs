@@ -59,6 +59,7 @@ use super::body::{Body, BodyKind};
 use super::broad_phase::{may_pair, BroadPhase};
 use super::contact::Contact;
 use super::events::StepReport;
+use super::mid_phase;
 use super::pool::Pool;
 use super::solver::is_active;
 use crate::collide::{time_of_impact_unchecked, Motion, Toi};
@@ -236,8 +237,11 @@ fn earliest_hit<const N: usize>(
             continue;
         }
         let other_motion = motion_of(o, h);
-        let toi =
-            time_of_impact_unchecked(&fast.shape, motion, &o.shape, &other_motion, h, tolerance);
+        let toi = if fast.shape.is_convex() && o.shape.is_convex() {
+            time_of_impact_unchecked(&fast.shape, motion, &o.shape, &other_motion, h, tolerance)
+        } else {
+            earliest_part_toi(fast, motion, o, &other_motion, h, tolerance)
+        };
         let (time, normal) = match toi {
             Toi::Hit { time, normal, .. } => (time, Some(normal)),
             // The sweep's budget ran out before it could clear the rest of the step:
@@ -260,6 +264,57 @@ fn earliest_hit<const N: usize>(
         }
     }
     best
+}
+
+/// The earliest time of impact between the parts of two bodies (a mesh's triangles, a
+/// compound's parts) whose bounds meet the other's path over the step. A part moves with
+/// its body's motion, from its pose in the body at the start, its origin at the velocity
+/// it has there (`v + ω × r`): exact for parts of bodies that do not turn, a first-order
+/// path for turning compounds.
+fn earliest_part_toi(
+    fast: &Body<'_>,
+    motion: &Motion,
+    o: &Body<'_>,
+    other_motion: &Motion,
+    h: f32,
+    tolerance: f32,
+) -> Toi {
+    let path = |b: &Body<'_>| b.shape.aabb(&b.pose0).union(&b.shape.aabb(&b.pose));
+    let (fast_path, other_path) = (path(fast), path(o));
+    let mut best = Toi::Separated;
+    let mut best_time = f32::INFINITY;
+    mid_phase::parts_near(&fast.shape, &motion.pose, &other_path, |pa, at_a| {
+        let ma = part_motion(motion, at_a.as_ref());
+        mid_phase::parts_near(&o.shape, &other_motion.pose, &fast_path, |pb, at_b| {
+            let mb = part_motion(other_motion, at_b.as_ref());
+            let toi = time_of_impact_unchecked(&pa, &ma, &pb, &mb, h, tolerance);
+            let time = match toi {
+                Toi::Hit { time, .. } | Toi::Unresolved { time } => time,
+                // Already touching a part: the contacts handle it, as for whole bodies.
+                Toi::Separated | Toi::Overlapping => return,
+            };
+            if time > 0.0 && time < best_time {
+                best_time = time;
+                best = toi;
+            }
+        });
+    });
+    best
+}
+
+/// The motion of a part at `at` in its body's frame (`None`: the body's frame).
+fn part_motion(m: &Motion, at: Option<&Iso>) -> Motion {
+    match at {
+        None => *m,
+        Some(p) => {
+            let r = m.pose.rotation.rotate(p.position);
+            Motion {
+                pose: m.pose * *p,
+                linear: m.linear + m.angular.cross(r),
+                angular: m.angular,
+            }
+        }
+    }
 }
 
 /// Put a body at `pose` (its velocities unchanged).

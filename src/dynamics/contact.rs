@@ -75,8 +75,10 @@ use crate::config::{WorldConfig, REUSE_SLACK};
 use crate::dynamics::body::{Body, Material};
 use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
+use crate::dynamics::mid_phase;
 use crate::dynamics::pool::Pool;
 use crate::math::{scalar, Iso, Vec3};
+use crate::shape::Shape;
 
 /// One persistent contact point with its accumulated impulses.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -103,6 +105,11 @@ pub(crate) struct Contact {
     pub a: u32,
     /// Slot of body B.
     pub b: u32,
+    /// Which parts of the pair (`mid_phase`): 0 for a pair of convex shapes (the only
+    /// contact of the pair); for a pair with a mesh or compound, the part pair's key
+    /// `1 + part_a · parts_b + part_b`, or [`RECORD`] for the pair's record, which holds
+    /// no points and follows the pair's part contacts.
+    pub sub: u32,
     /// Unit normal from A to B (world), as of this step.
     pub normal: Vec3,
     /// The normal in A's body frame: it turns with A while the manifold is reused.
@@ -130,16 +137,36 @@ pub(crate) struct Contact {
     pub built_margin: f32,
     /// Scratch of one update: a hit event is due (see the module docs).
     pub hit_due: bool,
+    /// Scratch of the mid phase, on a record: how many part contacts it adds this step.
+    pub new_parts: u32,
     /// The separating axis test's memory of this pair: only ever a shortcut to the same
     /// answer, so it is derived state (not in snapshots or checksums; fresh after restore).
     pub sat_cache: PairCache,
 }
 
 impl Contact {
-    /// Sort and match key: `(a, b)` packed.
+    /// The pair's key: `(a, b)` packed (the same for every contact of the pair).
     #[inline]
     pub fn key(&self) -> u64 {
         pair_key((self.a, self.b))
+    }
+
+    /// Sort key: the pair's key, then the part key `sub`.
+    #[inline]
+    pub fn full_key(&self) -> (u64, u32) {
+        (self.key(), self.sub)
+    }
+
+    /// True for the record of a pair with a mesh or compound (no points of its own).
+    #[inline]
+    pub fn is_record(&self) -> bool {
+        self.sub == RECORD
+    }
+
+    /// True for a contact between one part pair of a mesh or compound pair.
+    #[inline]
+    pub fn is_part(&self) -> bool {
+        self.sub != 0 && self.sub != RECORD
     }
 
     /// A contact for a new pair: no points, never built.
@@ -160,6 +187,9 @@ impl Contact {
         self.points.get(..usize::from(self.len)).unwrap_or(&[])
     }
 }
+
+/// [`Contact::sub`] of a pair's record.
+pub(crate) const RECORD: u32 = u32::MAX;
 
 /// The contact key of a pair, as [`Contact::key`].
 #[inline]
@@ -307,12 +337,18 @@ fn new_contact<const N: usize>(
     cfg: &WorldConfig,
 ) -> Contact {
     match (bodies.at(a as usize), bodies.at(b as usize)) {
-        (Some(x), Some(y)) => Contact::new_pair(
-            a,
-            b,
-            cfg.combine_materials(&x.material, &y.material),
-            x.sensor || y.sensor,
-        ),
+        (Some(x), Some(y)) => {
+            let mut c = Contact::new_pair(
+                a,
+                b,
+                cfg.combine_materials(&x.material, &y.material),
+                x.sensor || y.sensor,
+            );
+            if !(x.shape.is_convex() && y.shape.is_convex()) {
+                c.sub = RECORD;
+            }
+            c
+        }
         _ => Contact::new_pair(a, b, Material::DEFAULT, false),
     }
 }
@@ -332,6 +368,7 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let mut write = 0usize;
     let len = contacts.len();
     let mut tested = 0u32;
+    let (mut group_key, mut group_start) = (u64::MAX, 0usize);
     let slots = contacts.as_mut_slice();
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
@@ -343,11 +380,33 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
                 }
             }
         }
-        let Some(c) = slots.get_mut(write) else {
+        let Some(key) = slots.get(write).map(Contact::key) else {
             break;
         };
-        let (was_touching, kept) = (c.touching, update_one(c, bodies, cfg, &mut tested));
-        touch_events(was_touching, c, kept, bodies, events, report);
+        if key != group_key {
+            // The first contact of a pair: a mesh or compound pair's group starts here.
+            group_key = key;
+            group_start = write;
+        }
+        let (parts, rest) = slots.split_at_mut(write);
+        let Some(c) = rest.first_mut() else {
+            break;
+        };
+        let was_touching = c.touching;
+        let kept = if c.is_record() {
+            // Its part contacts came just before it: their narrow phase runs here, as a
+            // group; the record touches when one of them does.
+            let group = parts.get_mut(group_start..).unwrap_or(&mut []);
+            update_record(c, group, bodies, cfg, &mut tested)
+        } else if c.is_part() {
+            part_kept(c, bodies)
+        } else {
+            update_one(c, bodies, cfg, &mut tested)
+        };
+        if !c.is_part() {
+            // A part contact's events are its pair's, raised by the record.
+            touch_events(was_touching, c, kept, bodies, events, report);
+        }
         if kept {
             write += 1;
         }
@@ -360,6 +419,109 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     for c in contacts.iter().filter(|c| c.len > 0) {
         report.contacts = report.contacts.saturating_add(1);
         report.points = report.points.saturating_add(u32::from(c.len));
+    }
+}
+
+/// A part contact stays while its pair does (its narrow phase runs with its record's).
+fn part_kept<const N: usize>(c: &mut Contact, bodies: &Pool<Body<'_>, N>) -> bool {
+    c.hit_due = false;
+    match (bodies.at(c.a as usize), bodies.at(c.b as usize)) {
+        (Some(a), Some(b)) => a.fat.overlaps(&b.fat),
+        _ => false,
+    }
+}
+
+/// A pair record's update, with its part contacts `group` (just before it): false when
+/// the pair ends (a body gone, the boxes apart). While a body is awake, the group's
+/// manifolds are reused together or rebuilt together; a rebuild merges each patch of
+/// parts into one contact (`mid_phase::merge_patches`) and carries the impulses of the
+/// whole group over. The record touches when one of its parts does.
+fn update_record<const N: usize>(
+    c: &mut Contact,
+    group: &mut [Contact],
+    bodies: &Pool<Body<'_>, N>,
+    cfg: &WorldConfig,
+    tested: &mut u32,
+) -> bool {
+    c.hit_due = false;
+    c.len = 0;
+    let (Some(a), Some(b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+        return false;
+    };
+    if !a.fat.overlaps(&b.fat) {
+        return false;
+    }
+    if may_collide(a, b) {
+        update_group(group, a, b, cfg, tested, c.touching);
+    }
+    c.touching = group.iter().any(|p| p.touching);
+    true
+}
+
+/// Most old points and patches a group carries over a rebuild (the rest start cold).
+const GROUP_CARRY: usize = 16;
+
+/// The narrow phase of one pair's part contacts (see [`update_record`]).
+fn update_group(
+    group: &mut [Contact],
+    a: &Body<'_>,
+    b: &Body<'_>,
+    cfg: &WorldConfig,
+    tested: &mut u32,
+    was_touching: bool,
+) {
+    let reusable = group
+        .iter()
+        .all(|c| plan(c, a, b, cfg).is_some_and(|p| p.reusable(c)));
+    if reusable {
+        for c in group.iter_mut() {
+            reuse(c, a, b, cfg);
+        }
+        return;
+    }
+    // The group's points and friction patches before the rebuild.
+    let mut old: HVec<ContactPoint, GROUP_CARRY> = HVec::new();
+    let mut patches: HVec<(Vec3, Vec3, f32, bool), GROUP_CARRY> = HVec::new();
+    for c in group.iter().filter(|c| c.len > 0) {
+        for p in c.points() {
+            let _ = old.push(*p);
+        }
+        let _ = patches.push((c.normal, c.friction_impulse, c.twist_impulse, c.sticking));
+    }
+    for c in group.iter_mut() {
+        *tested = tested.saturating_add(1);
+        match plan(c, a, b, cfg) {
+            Some(p) => {
+                build(c, &p, a, b, cfg);
+            }
+            None => {
+                c.len = 0;
+                c.touching = false;
+            }
+        }
+    }
+    mid_phase::merge_patches(group, cfg.slop);
+    let touching = group.iter().any(|c| c.touching);
+    for c in group.iter_mut() {
+        c.friction_impulse = Vec3::ZERO;
+        c.twist_impulse = 0.0;
+        c.sticking = false;
+        if c.len == 0 {
+            continue;
+        }
+        warm_start(c, &old, cfg.slop);
+        // The friction patch of the old patch that faced the same way, if any.
+        let n = c.normal;
+        if let Some(&(_, f, t, s)) = patches
+            .iter()
+            .find(|p| p.0.dot(n) >= mid_phase::PATCH_NORMAL_COS)
+        {
+            c.friction_impulse = f;
+            c.twist_impulse = t;
+            c.sticking = s;
+        }
+        keep_patch_in_plane(c);
+        c.hit_due = !c.sensor && (old.is_empty() || (touching && !was_touching));
     }
 }
 
@@ -400,55 +562,166 @@ fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
 /// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
 /// build a new one and carry the impulses over (module docs).
 fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
+    let Some(plan) = plan(c, body_a, body_b, cfg) else {
+        c.len = 0;
+        c.touching = false;
+        return;
+    };
+    if plan.reusable(c) {
+        reuse(c, body_a, body_b, cfg);
+    } else {
+        let old_points = c.points;
+        let old = old_points.get(..usize::from(c.len)).unwrap_or(&[]);
+        if build(c, &plan, body_a, body_b, cfg) {
+            warm_start(c, old, cfg.slop);
+        }
+        keep_patch_in_plane(c);
+    }
+}
+
+/// What the narrow phase of one contact works on: the two convex shapes that meet (the
+/// bodies', or one part of each for a part contact) at their world poses, and the margin
+/// this step needs.
+struct Plan<'a> {
+    shape_a: Shape<'a>,
+    pose_a: Iso,
+    shape_b: Shape<'a>,
+    pose_b: Iso,
+    /// The parts' poses in their bodies' frames, for a part contact.
+    parts: Option<mid_phase::PartPair<'a>>,
+    margin: f32,
+    /// B's (part's) pose in A's (part's) frame now.
+    b_in_a: Iso,
+}
+
+/// The plan of contact `c`'s narrow phase; `None` for a part key that names no part.
+fn plan<'a>(
+    c: &Contact,
+    body_a: &Body<'a>,
+    body_b: &Body<'a>,
+    cfg: &WorldConfig,
+) -> Option<Plan<'a>> {
     let swept = |b: &Body<'_>| b.ccd && b.kind == crate::BodyKind::Dynamic;
     let reach = if swept(body_a) || swept(body_b) {
         cfg.dt * closing_bound(body_a, body_b)
     } else {
         0.0
     };
-    let margin = cfg.speculative_margin + reach;
-    let b_in_a = body_a.pose.inv_mul(&body_b.pose);
-    if c.built_margin >= 0.0 {
-        let drift = relative_drift(&c.built_pose, &b_in_a, body_b.shape.bounding_radius());
-        if drift <= REUSE_SLACK && margin + drift <= c.built_margin {
-            reuse(c, body_a, body_b, cfg);
-            return;
+    let parts = if c.is_part() {
+        Some(mid_phase::part_pair(&body_a.shape, &body_b.shape, c.sub)?)
+    } else {
+        None
+    };
+    let (shape_a, pose_a, shape_b, pose_b) = match &parts {
+        Some(p) => (
+            p.a,
+            placed(&body_a.pose, p.pose_a.as_ref()),
+            p.b,
+            placed(&body_b.pose, p.pose_b.as_ref()),
+        ),
+        None => (body_a.shape, body_a.pose, body_b.shape, body_b.pose),
+    };
+    Some(Plan {
+        shape_a,
+        pose_a,
+        shape_b,
+        pose_b,
+        parts,
+        margin: cfg.speculative_margin + reach,
+        b_in_a: pose_a.inv_mul(&pose_b),
+    })
+}
+
+impl Plan<'_> {
+    /// True when the manifold `c` holds may be reused (module docs, "Manifold reuse").
+    fn reusable(&self, c: &Contact) -> bool {
+        if c.built_margin < 0.0 {
+            return false;
         }
+        let mut drift = relative_drift(&c.built_pose, &self.b_in_a, self.shape_b.bounding_radius());
+        if self.parts.is_some() {
+            // A change in the distance of two points is bounded by either one's move
+            // relative to the other body: A's points in B's frame count too (a mesh
+            // triangle's radius is about the mesh's origin, far away).
+            let a_drift = relative_drift(
+                &c.built_pose.inverse(),
+                &self.b_in_a.inverse(),
+                self.shape_a.bounding_radius(),
+            );
+            drift = scalar::min(drift, a_drift);
+        }
+        drift <= REUSE_SLACK && self.margin + drift <= c.built_margin
     }
-    let built_margin = margin + REUSE_SLACK;
-    let manifold = contact_cached_unchecked(
-        &body_a.shape,
-        &body_a.pose,
-        &body_b.shape,
-        &body_b.pose,
+}
+
+/// Build `c`'s manifold afresh (no impulses carried over): false when it has no points.
+fn build(
+    c: &mut Contact,
+    plan: &Plan<'_>,
+    body_a: &Body<'_>,
+    body_b: &Body<'_>,
+    cfg: &WorldConfig,
+) -> bool {
+    let built_margin = plan.margin + REUSE_SLACK;
+    let mut manifold = contact_cached_unchecked(
+        &plan.shape_a,
+        &plan.pose_a,
+        &plan.shape_b,
+        &plan.pose_b,
         built_margin,
         &mut c.sat_cache,
     );
-    let old_points = c.points;
-    let old_len = c.len;
-    c.len = 0;
-    c.touching = false;
-    c.built_pose = b_in_a;
-    c.built_margin = built_margin;
-    if let Some(m) = manifold {
-        if fill_from_manifold(c, &m, body_a, body_b, cfg) {
-            let old = old_points.get(..usize::from(old_len)).unwrap_or(&[]);
-            warm_start(c, old, cfg.slop);
-        } else {
-            // Something non-finite (coordinates near f32::MAX): no points, rebuild next step.
-            c.len = 0;
-            c.touching = false;
-            c.built_margin = -1.0;
+    if let (Some(m), Some(p)) = (manifold.as_mut(), &plan.parts) {
+        let (a, b) = (&body_a.shape, &body_b.shape);
+        mid_phase::correct_mesh_contact(m, a, &body_a.pose, b, &body_b.pose, c.sub);
+        // Anchors from the parts' frames into the bodies'.
+        for q in m.points.iter_mut().take(usize::from(m.len)) {
+            if let Some(local) = &p.pose_a {
+                q.local_a = local.transform_point(q.local_a);
+            }
+            if let Some(local) = &p.pose_b {
+                q.local_b = local.transform_point(q.local_b);
+            }
         }
     }
+    c.len = 0;
+    c.touching = false;
+    c.built_pose = plan.b_in_a;
+    c.built_margin = built_margin;
+    let Some(m) = manifold.filter(|m| m.len > 0) else {
+        return false;
+    };
+    if fill_from_manifold(c, &m, body_a, body_b, cfg) {
+        true
+    } else {
+        // Something non-finite (coordinates near f32::MAX): no points, rebuild next step.
+        c.len = 0;
+        c.touching = false;
+        c.built_margin = -1.0;
+        false
+    }
+}
+
+/// The friction patch of `c` after a rebuild: reset when it has no points, else its
+/// impulse kept in the (possibly turned) tangent plane.
+fn keep_patch_in_plane(c: &mut Contact) {
     if c.len == 0 {
         c.friction_impulse = Vec3::ZERO;
         c.twist_impulse = 0.0;
         c.sticking = false;
     } else {
-        // The normal may have turned: the patch impulse stays in the tangent plane.
         let n = c.normal;
         c.friction_impulse -= n * c.friction_impulse.dot(n);
+    }
+}
+
+/// A part's world pose: the body's, moved by the part's pose in the body's frame when it
+/// has one (`None`: the part's frame is the body's).
+#[inline]
+fn placed(body: &Iso, part: Option<&Iso>) -> Iso {
+    match part {
+        Some(p) => *body * *p,
+        None => *body,
     }
 }
 
@@ -612,8 +885,24 @@ fn hit_events<const N: usize, const E: usize>(
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
-    for c in contacts.iter().filter(|c| c.hit_due) {
-        let Some(fastest) = fastest_point(c) else {
+    // The fastest due point among a mesh or compound pair's part contacts so far.
+    let mut pending: Option<(&Contact, &ContactPoint)> = None;
+    for c in contacts {
+        let due = if c.is_part() {
+            if let Some(p) = fastest_point(c).filter(|_| c.hit_due) {
+                if pending.is_none_or(|(_, q)| p.approach_speed > q.approach_speed) {
+                    pending = Some((c, p));
+                }
+            }
+            None
+        } else if c.is_record() {
+            pending.take()
+        } else if c.hit_due {
+            fastest_point(c).map(|p| (c, p))
+        } else {
+            None
+        };
+        let Some((c, fastest)) = due else {
             continue;
         };
         if fastest.approach_speed <= cfg.hit_event_speed {

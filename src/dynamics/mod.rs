@@ -7,6 +7,7 @@ pub(crate) mod ccd;
 pub(crate) mod contact;
 pub(crate) mod contact_solver;
 pub mod events;
+pub(crate) mod mid_phase;
 pub(crate) mod pool;
 pub(crate) mod projection;
 pub mod query;

@@ -13,6 +13,7 @@
 
 use crate::collide::{check_pose, distance_in_a, SimplexCache};
 use crate::dynamics::body::Body;
+use crate::dynamics::mid_phase;
 use crate::dynamics::pool::BodyHandle;
 use crate::error::{finite_vec, non_negative, Error, Input};
 use crate::math::{scalar, Aabb, Iso, Vec3};
@@ -289,6 +290,18 @@ fn ray_meets_box(ray: &Ray, aabb: &Aabb, max_t: f32) -> bool {
 /// True when `a` at `pose_a` and `b` at `pose_b` overlap or touch. Half-spaces are decided
 /// in closed form; everything else by GJK distance (`<= 0`) in A's frame.
 fn shapes_intersect(a: &Shape<'_>, pose_a: &Iso, b: &Shape<'_>, pose_b: &Iso) -> bool {
+    // A mesh or compound meets the other shape when one of its nearby parts does.
+    for (x, pose_x, y, pose_y) in [(a, pose_a, b, pose_b), (b, pose_b, a, pose_a)] {
+        if !x.is_convex() {
+            let mut hit = false;
+            let region = y.aabb(pose_y);
+            mid_phase::parts_near(x, pose_x, &region, |part, at| {
+                let pose = at.map_or(*pose_x, |p| *pose_x * p);
+                hit = hit || shapes_intersect(&part, &pose, y, pose_y);
+            });
+            return hit;
+        }
+    }
     match (a, b) {
         (Shape::HalfSpace(ha), Shape::HalfSpace(hb)) => {
             half_spaces_intersect(ha, pose_a, hb, pose_b)

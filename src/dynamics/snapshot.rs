@@ -38,7 +38,9 @@ use super::contact::{Contact, ContactPoint};
 use crate::config::{CombineRule, WorldConfig};
 use crate::error::{Error, SnapshotError};
 use crate::math::{Aabb, Iso, Quat, Vec3};
-use crate::shape::{Capsule, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle};
+use crate::shape::{
+    Capsule, Compound, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle, TriangleMesh,
+};
 use crate::World;
 
 /// Snapshot format version; bumped whenever the byte layout changes.
@@ -213,6 +215,48 @@ pub(crate) fn hull_fingerprint(h: &ConvexHull) -> u64 {
     f.0
 }
 
+/// Fingerprint of a mesh: FNV-1a 64 over its vertices and index triples.
+pub(crate) fn mesh_fingerprint(m: &TriangleMesh<'_>) -> u64 {
+    let mut f = Fnv::new();
+    f.u32(m.vertices().len() as u32);
+    for v in m.vertices() {
+        f.vec3(*v);
+    }
+    for t in m.indices() {
+        for i in t {
+            f.u32(*i);
+        }
+    }
+    f.0
+}
+
+/// Fingerprint of a compound: FNV-1a 64 over each part's pose and shape as a snapshot
+/// stores them (a hull part by its fingerprint).
+pub(crate) fn compound_fingerprint(c: &Compound<'_>) -> u64 {
+    let mut f = Fnv::new();
+    f.u32(c.part_count());
+    for p in c.parts() {
+        f.iso(&p.pose);
+        put_shape(&mut f, &p.shape);
+    }
+    f.0
+}
+
+/// A shape referenced by a fingerprint in snapshots: its tag and fingerprint.
+pub(crate) fn shape_reference(shape: &Shape<'_>) -> Option<(u8, u64)> {
+    match shape {
+        Shape::Hull(h) => Some((TAG_HULL, hull_fingerprint(h))),
+        Shape::Mesh(m) => Some((TAG_MESH, mesh_fingerprint(m))),
+        Shape::Compound(c) => Some((TAG_COMPOUND, compound_fingerprint(c))),
+        _ => None,
+    }
+}
+
+/// Shape tags of the referenced shapes.
+const TAG_HULL: u8 = 3;
+const TAG_MESH: u8 = 6;
+const TAG_COMPOUND: u8 = 7;
+
 fn put_shape(s: &mut impl Sink, shape: &Shape<'_>) {
     match shape {
         Shape::Sphere(x) => {
@@ -242,13 +286,18 @@ fn put_shape(s: &mut impl Sink, shape: &Shape<'_>) {
                 s.vec3(v);
             }
         }
+        Shape::Mesh(m) => {
+            s.u8(TAG_MESH);
+            s.u64(mesh_fingerprint(m));
+        }
+        Shape::Compound(c) => {
+            s.u8(TAG_COMPOUND);
+            s.u64(compound_fingerprint(c));
+        }
     }
 }
 
-fn get_shape<'a>(
-    r: &mut Reader<'_>,
-    hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>,
-) -> R<Shape<'a>> {
+fn get_shape<'a>(r: &mut Reader<'_>, refs: &ShapeLookup<'_, 'a>) -> R<Shape<'a>> {
     let bad = |_| SnapshotError::Corrupt;
     Ok(match r.u8()? {
         0 => Shape::Sphere(Sphere::new(r.f32()?).map_err(bad)?),
@@ -257,7 +306,10 @@ fn get_shape<'a>(
             Shape::Capsule(Capsule::new(h, rad).map_err(bad)?)
         }
         2 => Shape::Cuboid(Cuboid::new(r.vec3()?).map_err(bad)?),
-        3 => Shape::Hull(hulls(r.u64()?).ok_or(SnapshotError::MissingHull)?),
+        TAG_HULL => refs(TAG_HULL, r.u64()?).ok_or(SnapshotError::MissingHull)?,
+        tag @ (TAG_MESH | TAG_COMPOUND) => {
+            refs(tag, r.u64()?).ok_or(SnapshotError::MissingShape)?
+        }
         4 => {
             // Stored already normalised: keep the bits (normalising again may change them).
             let normal = r.vec3()?;
@@ -427,8 +479,11 @@ pub const MAX_STATE_FORCE: f32 = 1.0e30;
 /// the API could not produce; the rest is bounded: positions and boxes within
 /// [`MAX_STATE_MAGNITUDE`], forces within [`MAX_STATE_FORCE`], finite velocities (the
 /// step clamps them to the speed limits before using them), a non-negative sleep timer.
-fn get_body<'a>(r: &mut Reader<'_>, hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>) -> R<Body<'a>> {
-    let shape = get_shape(r, hulls)?;
+/// Finds a referenced shape by its tag and fingerprint.
+type ShapeLookup<'f, 'a> = dyn Fn(u8, u64) -> Option<Shape<'a>> + 'f;
+
+fn get_body<'a>(r: &mut Reader<'_>, refs: &ShapeLookup<'_, 'a>) -> R<Body<'a>> {
+    let shape = get_shape(r, refs)?;
     let kind = match r.u8()? {
         0 => BodyKind::Dynamic,
         1 => BodyKind::Static,
@@ -545,7 +600,14 @@ fn get_point(r: &mut Reader<'_>) -> R<ContactPoint> {
 
 fn put_contact(s: &mut impl Sink, c: &Contact) {
     s.u32(c.a);
-    s.u32(c.b);
+    if c.sub == 0 {
+        s.u32(c.b);
+    } else {
+        // A part contact or record (mid phase): B's slot flagged, then the part key. A
+        // world of convex bodies writes the same bytes as before parts existed.
+        s.u32(c.b | SUB_FLAG);
+        s.u32(c.sub);
+    }
     s.vec3(c.normal);
     s.vec3(c.normal_local);
     s.u8(c.len);
@@ -567,8 +629,20 @@ fn unit_or_zero(v: Vec3) -> bool {
     v == Vec3::ZERO || crate::math::scalar::abs(v.length_squared() - 1.0) <= 1.0e-3
 }
 
+/// Set in a contact's B slot when a part key follows.
+const SUB_FLAG: u32 = 1 << 31;
+
 fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
     let (a, b) = (r.u32()?, r.u32()?);
+    let (b, sub) = if b & SUB_FLAG != 0 {
+        let sub = r.u32()?;
+        if sub == 0 {
+            return Err(SnapshotError::Corrupt);
+        }
+        (b & !SUB_FLAG, sub)
+    } else {
+        (b, 0)
+    };
     let normal = r.vec3()?;
     let normal_local = r.vec3()?;
     let len = r.u8()?;
@@ -597,6 +671,7 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
     Ok(Contact {
         a,
         b,
+        sub,
         normal,
         normal_local,
         len,
@@ -611,6 +686,7 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
             built_margin
         },
         hit_due: false,
+        new_parts: 0,
         friction_impulse,
         twist_impulse,
         sticking,
@@ -763,15 +839,14 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// [`World::restore`], also looking hull shapes up in `hulls`.
     pub fn restore_with_hulls(&mut self, buf: &[u8], hulls: &'a [ConvexHull]) -> Result<(), Error> {
         let payload = check_header::<BODIES, CONTACTS, EVENTS>(buf).map_err(Error::Snapshot)?;
-        // The hulls the world already references, plus the caller's.
-        let current = self.clone_hull_refs();
-        let lookup = |fp: u64| -> Option<&'a ConvexHull> {
-            current
-                .iter()
-                .flatten()
-                .copied()
-                .chain(hulls.iter())
-                .find(|h| hull_fingerprint(h) == fp)
+        // The shapes the world already references, plus the caller's hulls.
+        let current = self.clone_shape_refs();
+        let lookup = |tag: u8, fp: u64| -> Option<Shape<'a>> {
+            let known = current.iter().flatten().copied();
+            let given = hulls.iter().map(Shape::Hull);
+            known
+                .chain(given)
+                .find(|s| shape_reference(s) == Some((tag, fp)))
         };
         // Pass 1: validate everything without touching the world.
         self.read_payload(payload, &lookup, false)
@@ -785,29 +860,33 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         Ok(())
     }
 
-    /// Up to 64 distinct hulls referenced by bodies (enough for restore lookups).
-    fn clone_hull_refs(&self) -> [Option<&'a ConvexHull>; 64] {
-        let mut out: [Option<&'a ConvexHull>; 64] = [None; 64];
+    /// Up to 64 distinct referenced shapes (hulls, meshes, compounds) of the bodies
+    /// (enough for restore lookups).
+    fn clone_shape_refs(&self) -> [Option<Shape<'a>>; 64] {
+        let mut out: [Option<Shape<'a>>; 64] = [None; 64];
         let mut n = 0;
+        let same = |x: &Shape<'a>, y: &Shape<'a>| match (x, y) {
+            (Shape::Hull(p), Shape::Hull(q)) => core::ptr::eq(*p, *q),
+            (Shape::Mesh(p), Shape::Mesh(q)) => core::ptr::eq(*p, *q),
+            (Shape::Compound(p), Shape::Compound(q)) => core::ptr::eq(*p, *q),
+            _ => false,
+        };
         for (_, b) in self.bodies.iter() {
-            if let Shape::Hull(h) = b.shape {
-                if !out.iter().flatten().any(|x| core::ptr::eq(*x, h)) {
-                    if let Some(slot) = out.get_mut(n) {
-                        *slot = Some(h);
-                        n += 1;
-                    }
+            if matches!(
+                b.shape,
+                Shape::Hull(_) | Shape::Mesh(_) | Shape::Compound(_)
+            ) && !out.iter().flatten().any(|x| same(x, &b.shape))
+            {
+                if let Some(slot) = out.get_mut(n) {
+                    *slot = Some(b.shape);
+                    n += 1;
                 }
             }
         }
         out
     }
 
-    fn read_payload(
-        &mut self,
-        payload: &[u8],
-        hulls: &dyn Fn(u64) -> Option<&'a ConvexHull>,
-        apply: bool,
-    ) -> R<()> {
+    fn read_payload(&mut self, payload: &[u8], refs: &ShapeLookup<'_, 'a>, apply: bool) -> R<()> {
         let mut r = Reader {
             buf: payload,
             pos: 0,
@@ -819,16 +898,25 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             return Err(SnapshotError::Corrupt);
         }
         let mut live = [false; BODIES];
+        // Bodies with parts (mesh, compound): their pairs are records and part contacts.
+        let mut composite = [false; BODIES];
         if apply {
             self.bodies = super::pool::Pool::new();
             self.config = config;
             self.step_count = step_count;
         }
-        for (i, is_live) in live.iter_mut().enumerate().take(high) {
+        for (i, (is_live, parts)) in live
+            .iter_mut()
+            .zip(composite.iter_mut())
+            .enumerate()
+            .take(high)
+        {
             let generation = r.u32()?;
             let body = if r.bool()? {
                 *is_live = true;
-                Some(get_body(&mut r, hulls)?)
+                let body = get_body(&mut r, refs)?;
+                *parts = !body.shape.is_convex();
+                Some(body)
             } else {
                 None
             };
@@ -848,18 +936,33 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             self.contacts.clear();
         }
         let mut last_key = None;
+        // A pair with parts whose record has not come yet.
+        let mut open_pair: Option<u64> = None;
         for _ in 0..n_contacts {
             let c = get_contact(&mut r)?;
             let alive = |s: u32| live.get(s as usize).copied().unwrap_or(false);
-            if !alive(c.a) || !alive(c.b) || last_key.is_some_and(|k| k >= c.key()) {
+            let parts = |s: u32| composite.get(s as usize).copied().unwrap_or(false);
+            if !alive(c.a) || !alive(c.b) || last_key.is_some_and(|k| k >= c.full_key()) {
                 return Err(SnapshotError::Corrupt);
             }
-            last_key = Some(c.key());
+            // Convex pairs have one contact with key 0; a pair with parts has part
+            // contacts (without points past its shapes' parts) and then its record.
+            let with_parts = parts(c.a) || parts(c.b);
+            let open_other = open_pair.is_some_and(|k| k != c.key());
+            if (c.sub == 0) == with_parts || open_other || (c.is_record() && c.len != 0) {
+                return Err(SnapshotError::Corrupt);
+            }
+            open_pair = if c.is_record() {
+                None
+            } else {
+                with_parts.then_some(c.key())
+            };
+            last_key = Some(c.full_key());
             if apply && self.contacts.push(c).is_err() {
                 return Err(SnapshotError::Capacity);
             }
         }
-        if r.pos != payload.len() {
+        if r.pos != payload.len() || open_pair.is_some() {
             return Err(SnapshotError::Corrupt);
         }
         Ok(())

@@ -203,7 +203,9 @@ fn plan<const N: usize, const C: usize>(
             continue;
         }
         let class = u32::from(contact_solver::has_rigid_partner(c, bodies)) << 31;
-        let key = class | (pair_hash(c.key()) >> 1);
+        // Part contacts of one pair differ by `sub` (0 for a convex pair: its own key).
+        let sub = u64::from(c.sub).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        let key = class | (pair_hash(c.key() ^ sub) >> 1);
         // Cannot fail: one entry per contact at most.
         let _ = scratch.push((key, i as u32));
     }

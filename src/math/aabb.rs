@@ -36,6 +36,14 @@ impl Aabb {
         Aabb::from_center_half(iso.position, h)
     }
 
+    /// The box around this box moved by `iso` (a box given in some frame, bounded in the
+    /// frame `iso` maps it to): centre `iso · c`, half-extents `|R| h`.
+    pub fn transformed(&self, iso: &Iso) -> Aabb {
+        let c = (self.min + self.max) * 0.5;
+        let h = (self.max - self.min) * 0.5;
+        Aabb::from_local_box(&Iso::new(iso.transform_point(c), iso.rotation), h)
+    }
+
     /// The smallest box holding both.
     #[inline]
     pub fn union(&self, o: &Aabb) -> Aabb {

@@ -232,6 +232,9 @@ fn outside_by(shape: &Shape, p: Vec3) -> f32 {
             }
             out
         }
+        // Not convex: the narrow phase never sees them; the least over their parts
+        // would be the answer, and no property asks for it.
+        Shape::Mesh(_) | Shape::Compound(_) => f32::NAN,
     }
 }
 

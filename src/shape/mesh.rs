@@ -148,7 +148,7 @@ impl Default for BvhNode {
 /// # Ok(())
 /// # }
 /// ```
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleMesh<'a> {
     vertices: &'a [Vec3],
     indices: &'a [[u32; 3]],

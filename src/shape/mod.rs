@@ -7,6 +7,7 @@
 //! the core.
 
 mod capsule;
+mod compound;
 mod cuboid;
 mod hull;
 mod mesh;
@@ -15,6 +16,7 @@ mod sphere;
 mod triangle;
 
 pub use capsule::Capsule;
+pub use compound::{Compound, CompoundPart, MAX_COMPOUND_PARTS};
 pub use cuboid::Cuboid;
 pub(crate) use hull::EDGE_TILT_SIN;
 pub use hull::{
@@ -295,6 +297,15 @@ pub enum Shape<'a> {
     HalfSpace(HalfSpace),
     /// A single triangle (static bodies only; no volume).
     Triangle(Triangle),
+    /// A triangle mesh with its hierarchy (static and kinematic bodies only; no volume).
+    /// Not convex: the world's mid phase pairs each nearby triangle with the other body,
+    /// and the convex-shape queries of [`crate::collide`] refuse it with
+    /// [`Error::NotConvex`].
+    Mesh(&'a TriangleMesh<'a>),
+    /// Convex parts at poses in the body's frame. Not convex as a whole: the mid phase
+    /// pairs each nearby part with the other body, and the convex-shape queries refuse it
+    /// with [`Error::NotConvex`].
+    Compound(&'a Compound<'a>),
 }
 
 impl Shape<'static> {
@@ -331,9 +342,29 @@ impl<'a> Shape<'a> {
         Shape::Hull(hull)
     }
 
-    /// True for shapes that only static bodies may use (half-space, triangle).
+    /// True for shapes a dynamic body may not use (half-space, triangle, mesh: they have
+    /// no volume); kinematic bodies may use triangles and meshes.
     pub fn is_static_only(&self) -> bool {
-        matches!(self, Shape::HalfSpace(_) | Shape::Triangle(_))
+        matches!(
+            self,
+            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_)
+        )
+    }
+
+    /// True for the shapes the narrow phase takes as they are; false for a mesh or a
+    /// compound, whose parts it takes one at a time.
+    #[inline]
+    pub fn is_convex(&self) -> bool {
+        !matches!(self, Shape::Mesh(_) | Shape::Compound(_))
+    }
+
+    /// [`Error::NotConvex`] for a mesh or compound (the convex-shape queries' door).
+    pub(crate) fn check_convex(&self) -> Result<(), Error> {
+        if self.is_convex() {
+            Ok(())
+        } else {
+            Err(Error::NotConvex)
+        }
     }
 
     /// The radius that inflates the core (m); zero for polytopes.
@@ -357,6 +388,8 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.core_support(dir),
             Shape::HalfSpace(_) => (Vec3::ZERO, 0),
             Shape::Triangle(t) => t.core_support(dir),
+            Shape::Mesh(m) => mesh_support(m, dir),
+            Shape::Compound(c) => c.support(dir),
         }
     }
 
@@ -370,19 +403,26 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.core_vertex(index),
             Shape::HalfSpace(_) => Vec3::ZERO,
             Shape::Triangle(t) => t.core_vertex(index),
+            Shape::Mesh(m) => m
+                .vertices()
+                .get(index as usize)
+                .copied()
+                .unwrap_or_default(),
+            Shape::Compound(_) => Vec3::ZERO,
         }
     }
 
     /// How many core vertices [`Shape::core_vertex`] numbers (the core is their convex
     /// hull): 1 for a sphere (its centre), 2 for a capsule, 8 for a box, a hull's vertex
-    /// count, 3 for a triangle; `None` for a half-space, which has no finite core.
+    /// count, 3 for a triangle; `None` for a half-space, which has no finite core, and
+    /// for a mesh or compound, which are not convex.
     pub fn core_vertex_count(&self) -> Option<u32> {
         match self {
             Shape::Sphere(_) => Some(1),
             Shape::Capsule(_) => Some(2),
             Shape::Cuboid(_) => Some(8),
             Shape::Hull(h) => Some(h.vertices().len() as u32),
-            Shape::HalfSpace(_) => None,
+            Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::Compound(_) => None,
             Shape::Triangle(_) => Some(3),
         }
     }
@@ -400,11 +440,13 @@ impl<'a> Shape<'a> {
 
     /// The face of the core that best supports `dir` (local frame): the face whose normal
     /// is most aligned with `dir`, or an edge or vertex where the core has no such face.
+    /// For a mesh or compound, the supporting point as a one-vertex face.
     pub fn supporting_face(&self, dir: Vec3) -> Face {
         match self {
-            Shape::Sphere(_) => {
-                let mut f = Face::new(dir.normalize_or(Vec3::Y), FeatureId::vertex(0));
-                f.push(Vec3::ZERO, FeatureId::vertex(0), FeatureId::vertex(0));
+            Shape::Sphere(_) | Shape::Mesh(_) | Shape::Compound(_) => {
+                let (p, i) = self.core_support(dir);
+                let mut f = Face::new(dir.normalize_or(Vec3::Y), FeatureId::vertex(i));
+                f.push(p, FeatureId::vertex(i), FeatureId::vertex(i));
                 f
             }
             Shape::Capsule(c) => c.supporting_face(dir),
@@ -429,6 +471,8 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.aabb(pose),
             Shape::HalfSpace(p) => p.aabb(pose),
             Shape::Triangle(t) => t.aabb(pose),
+            Shape::Mesh(m) => m.aabb().transformed(pose),
+            Shape::Compound(c) => c.aabb(pose),
         }
     }
 
@@ -442,11 +486,16 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.bounding_radius(),
             Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
             Shape::Triangle(t) => t.bounding_radius(),
+            Shape::Mesh(m) => {
+                let b = m.aabb();
+                b.min.abs().max(b.max.abs()).length()
+            }
+            Shape::Compound(c) => c.bounding_radius(),
         }
     }
 
     /// Smallest extent: the thickness a fast body can tunnel through in one step (m).
-    /// For a triangle, zero.
+    /// For a triangle or mesh, zero; for a compound, its thinnest part's.
     pub fn min_extent(&self) -> f32 {
         match self {
             Shape::Sphere(s) => 2.0 * s.radius,
@@ -454,7 +503,8 @@ impl<'a> Shape<'a> {
             Shape::Cuboid(b) => 2.0 * b.half_extents.min_elem(),
             Shape::Hull(h) => h.min_extent(),
             Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
-            Shape::Triangle(_) => 0.0,
+            Shape::Triangle(_) | Shape::Mesh(_) => 0.0,
+            Shape::Compound(c) => c.min_extent(),
         }
     }
 
@@ -467,7 +517,10 @@ impl<'a> Shape<'a> {
             Shape::Capsule(c) => c.mass_properties(density),
             Shape::Cuboid(b) => b.mass_properties(density),
             Shape::Hull(h) => h.mass_properties(density),
-            Shape::HalfSpace(_) | Shape::Triangle(_) => return Err(Error::NoVolume),
+            Shape::Compound(c) => c.mass_properties(density)?,
+            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_) => {
+                return Err(Error::NoVolume)
+            }
         };
         // A huge density times a large shape can overflow `f32`.
         if props.mass.is_finite() && props.mass > 0.0 && props.inertia.is_finite() {
@@ -505,6 +558,8 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.cast_ray(&local, max_t),
             Shape::HalfSpace(p) => p.cast_ray(&local, max_t),
             Shape::Triangle(t) => t.cast_ray(&local, max_t),
+            Shape::Mesh(m) => m.cast_ray(&local, max_t).map(|(_, h)| h),
+            Shape::Compound(c) => c.cast_ray(&local, max_t).map(|(_, h)| h),
         }?;
         Some(RayHit {
             t: hit.t,
@@ -512,4 +567,19 @@ impl<'a> Shape<'a> {
             normal: pose.transform_vector(hit.normal),
         })
     }
+}
+
+/// A mesh's furthest vertex along `dir` (the first of equals) and its index: the support
+/// of the mesh's convex hull, by a scan of every vertex.
+fn mesh_support(m: &TriangleMesh<'_>, dir: Vec3) -> (Vec3, u32) {
+    let mut best = (Vec3::ZERO, 0u32);
+    let mut best_d = f32::NEG_INFINITY;
+    for (i, &v) in m.vertices().iter().enumerate() {
+        let d = v.dot(dir);
+        if d > best_d {
+            best_d = d;
+            best = (v, i as u32);
+        }
+    }
+    best
 }

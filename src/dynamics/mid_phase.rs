@@ -1,0 +1,629 @@
+//! Stage 4: the mid phase. A pair of convex bodies is one contact. A pair with a triangle
+//! mesh or a compound is a *record* (no points; it carries the pair's touching state and
+//! events) and one *part contact* per pair of parts that may touch: per triangle of a
+//! mesh, per part of a compound. Each part contact runs the convex narrow phase on its
+//! two parts, keeps its own manifold, cache and warm start, and is solved like any
+//! other contact.
+//!
+//! # Which parts
+//!
+//! A part of body X may touch body Y when its bounds, in X's frame, overlap Y's enlarged
+//! box (`Body::fat`, which covers Y's motion this step and the speculative margin)
+//! moved into X's frame ([`Aabb::transformed`]): a compound tests each part's bounds, a
+//! mesh walks its hierarchy ([`TriangleMesh::query_aabb`]). When both bodies have parts
+//! (a compound on a mesh, two compounds), each part of X that may touch Y is grown by as
+//! much as X's enlarged box exceeds X's bounds, and Y's parts are those its box reaches.
+//!
+//! # Keys and order
+//!
+//! Part `i` of A and part `j` of B have the key `sub = 1 + i · parts(B) + j` (a convex
+//! shape has one part); the record has [`RECORD`], so in `contacts` (sorted by pair, then
+//! `sub`) a pair's part contacts come in key order and its record last. Every step, for
+//! every pair with an awake body, this stage lists the part pairs that may touch (sorted,
+//! at most [`MAX_PAIR_PARTS`]: the first found in the hierarchy's order are kept, the
+//! rest counted in `StepReport::dropped_contacts`), removes the part contacts no longer
+//! listed (compacting in place, in key order) and adds the new ones with no points
+//! (expanding in place from the back); new part contacts that do not fit in `contacts`
+//! are dropped, the highest keys first, and counted the same way. Sleeping pairs keep
+//! their part contacts as they are.
+
+use heapless::Vec as HVec;
+
+use crate::collide::Manifold;
+use crate::dynamics::body::Body;
+use crate::dynamics::broad_phase::may_collide;
+use crate::dynamics::contact::{Contact, ContactPoint, RECORD};
+use crate::dynamics::events::StepReport;
+use crate::dynamics::pool::Pool;
+use crate::math::{scalar, Aabb, Iso, Vec3};
+use crate::shape::Shape;
+use crate::shape::TriangleMesh;
+
+/// Most part pairs one body pair may have contacts for at a time (a box on a mesh whose
+/// triangles are much smaller than it reaches this; the rest are dropped and counted).
+pub const MAX_PAIR_PARTS: usize = 64;
+
+/// The two convex parts of a part contact, each with its pose in its body's frame (`None`
+/// when the part's frame is the body's: a convex body, a mesh triangle).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PartPair<'a> {
+    pub a: Shape<'a>,
+    pub pose_a: Option<Iso>,
+    pub b: Shape<'a>,
+    pub pose_b: Option<Iso>,
+}
+
+/// How many parts the mid phase numbers in a shape: a mesh's triangles, a compound's
+/// parts, or 1 for a convex shape.
+#[inline]
+pub(crate) fn part_count(s: &Shape<'_>) -> u32 {
+    match s {
+        Shape::Mesh(m) => m.triangle_count(),
+        Shape::Compound(c) => c.part_count(),
+        _ => 1,
+    }
+}
+
+/// Part `i` of a shape and its pose in the shape's frame; `None` past the last.
+fn part<'a>(s: &Shape<'a>, i: u32) -> Option<(Shape<'a>, Option<Iso>)> {
+    match s {
+        Shape::Mesh(m) => m.triangle(i).map(|t| (Shape::Triangle(t), None)),
+        Shape::Compound(c) => c.part(i).map(|(p, _)| (p.shape, Some(p.pose))),
+        _ => (i == 0).then_some((*s, None)),
+    }
+}
+
+/// The part pair a part contact's `sub` names (module docs); `None` for a key that names
+/// no part (a record, a convex pair's contact, a key past the shapes' parts).
+pub(crate) fn part_pair<'a>(a: &Shape<'a>, b: &Shape<'a>, sub: u32) -> Option<PartPair<'a>> {
+    if sub == RECORD {
+        return None;
+    }
+    let k = sub.checked_sub(1)?;
+    let nb = part_count(b).max(1);
+    let (pa, pose_a) = part(a, k / nb)?;
+    let (pb, pose_b) = part(b, k % nb)?;
+    Some(PartPair {
+        a: pa,
+        pose_a,
+        b: pb,
+        pose_b,
+    })
+}
+
+/// Part `i`'s bounds in its shape's frame (a convex shape: its own).
+fn part_bounds(s: &Shape<'_>, i: u32) -> Aabb {
+    match s {
+        Shape::Mesh(m) => m.triangle(i).map_or(Aabb::default(), |t| {
+            let [a, b, c] = t.vertices;
+            Aabb::new(a.min(b).min(c), a.max(b).max(c))
+        }),
+        Shape::Compound(c) => c.part(i).map_or(Aabb::default(), |(_, b)| b),
+        _ => s.local_aabb(),
+    }
+}
+
+/// Call `f` with every part of `s` whose bounds (in `s`'s frame) overlap `region` (in
+/// `s`'s frame): a mesh in its hierarchy's order, a compound in part order, a convex
+/// shape's only part always.
+fn query_parts(s: &Shape<'_>, region: &Aabb, f: impl FnMut(u32)) {
+    let mut f = f;
+    match s {
+        Shape::Mesh(m) => m.query_aabb(region, f),
+        Shape::Compound(c) => c.query_aabb(region, f),
+        _ => f(0),
+    }
+}
+
+/// How far a body's enlarged box reaches past its bounds (m): the largest margin on any
+/// side, never negative.
+fn fat_growth(body: &Body<'_>) -> f32 {
+    let tight = body.shape.aabb(&body.pose);
+    let lo = tight.min - body.fat.min;
+    let hi = body.fat.max - tight.max;
+    lo.max(hi).max_elem().max(0.0)
+}
+
+/// The part pairs of bodies `a` and `b` that may touch (module docs), sorted; false when
+/// some did not fit in `out` (those found first are kept).
+pub(crate) fn candidates(a: &Body<'_>, b: &Body<'_>, out: &mut HVec<u32, MAX_PAIR_PARTS>) -> bool {
+    out.clear();
+    let nb = part_count(&b.shape).max(1);
+    let mut fits = true;
+    let mut push = |i: u32, j: u32| {
+        let key = 1 + i * nb + j;
+        if out.push(key).is_err() {
+            fits = false;
+        }
+    };
+    let b_in_a_frame = b.fat.transformed(&a.pose.inverse());
+    if b.shape.is_convex() {
+        query_parts(&a.shape, &b_in_a_frame, |i| push(i, 0));
+    } else if a.shape.is_convex() {
+        let a_in_b_frame = a.fat.transformed(&b.pose.inverse());
+        query_parts(&b.shape, &a_in_b_frame, |j| push(0, j));
+    } else {
+        // Both have parts: each of A's that reaches B, grown like A's box, against B's.
+        let grow = fat_growth(a);
+        let a_to_b = b.pose.inverse() * a.pose;
+        let a_in_b_frame = a.fat.transformed(&b.pose.inverse());
+        query_parts(&a.shape, &b_in_a_frame, |i| {
+            let region = part_bounds(&a.shape, i).transformed(&a_to_b).expanded(grow);
+            if region.overlaps(&a_in_b_frame) {
+                query_parts(&b.shape, &region, |j| push(i, j));
+            }
+        });
+    }
+    crate::sort::sort_unstable(out);
+    fits
+}
+
+/// Stage 4 over every pair with a mesh or compound (module docs): part contacts no
+/// longer listed are removed, new ones added with no points, in key order. Pairs of
+/// convex shapes pass through untouched.
+pub(crate) fn update_parts<const N: usize, const C: usize>(
+    contacts: &mut HVec<Contact, C>,
+    bodies: &Pool<Body<'_>, N>,
+    report: &mut StepReport,
+) {
+    if !contacts.iter().any(Contact::is_record) {
+        return;
+    }
+    let mut list: HVec<u32, MAX_PAIR_PARTS> = HVec::new();
+    let mut dropped = 0u32;
+    // Pass 1, forward: compact away the part contacts no longer listed; each record
+    // notes how many of its list are missing.
+    let len = contacts.len();
+    let slots = contacts.as_mut_slice();
+    let mut write = 0usize;
+    // The pair whose list is in `list`, how many of it exist so far.
+    let mut current: Option<(u64, usize)> = None;
+    let mut missing_total = 0usize;
+    for read in 0..len {
+        let Some(&(mut c)) = slots.get(read) else {
+            break;
+        };
+        let mut keep = true;
+        if c.sub != 0 {
+            if current.is_none_or(|(k, _)| k != c.key()) {
+                current = listed(&c, bodies, &mut list, &mut dropped).map(|_| (c.key(), 0));
+            }
+            if c.is_record() {
+                c.new_parts = match current {
+                    Some((_, found)) => list.len().saturating_sub(found) as u32,
+                    None => 0,
+                };
+                missing_total += c.new_parts as usize;
+                current = None;
+            } else if let Some((_, found)) = current.as_mut() {
+                if list.binary_search(&c.sub).is_ok() {
+                    *found += 1;
+                } else {
+                    keep = false;
+                }
+            }
+        }
+        if keep {
+            if let Some(dst) = slots.get_mut(write) {
+                *dst = c;
+            }
+            write += 1;
+        }
+    }
+    contacts.truncate(write);
+    if missing_total > 0 {
+        let room = C - contacts.len();
+        if missing_total > room {
+            // Keep the lowest keys: cut from the last record backwards.
+            let mut excess = missing_total - room;
+            for c in contacts.iter_mut().rev() {
+                if excess == 0 {
+                    break;
+                }
+                if c.is_record() {
+                    let cut = (c.new_parts as usize).min(excess);
+                    c.new_parts -= cut as u32;
+                    excess -= cut;
+                    dropped = dropped.saturating_add(cut as u32);
+                }
+            }
+            missing_total = room;
+        }
+        add_missing(contacts, bodies, missing_total, &mut list);
+    }
+    report.dropped_contacts = report.dropped_contacts.saturating_add(dropped);
+}
+
+/// The list of the pair of `c` (a part contact or record) into `list`, or `None` when
+/// the pair is left as it is this step: a body gone, the boxes apart (stage 6 removes
+/// it), or nothing awake.
+fn listed<const N: usize>(
+    c: &Contact,
+    bodies: &Pool<Body<'_>, N>,
+    list: &mut HVec<u32, MAX_PAIR_PARTS>,
+    dropped: &mut u32,
+) -> Option<()> {
+    let (a, b) = (bodies.at(c.a as usize)?, bodies.at(c.b as usize)?);
+    if !a.fat.overlaps(&b.fat) || !may_collide(a, b) {
+        return None;
+    }
+    if !candidates(a, b, list) {
+        *dropped = dropped.saturating_add(1);
+    }
+    Some(())
+}
+
+/// Pass 2, backward: open room for `total` new part contacts and write each record's
+/// first `new_parts` missing ones (the lowest keys), merged with its existing part
+/// contacts in key order. Every contact moves up by the number of new ones below it, so
+/// each is read before its slot is written.
+fn add_missing<const N: usize, const C: usize>(
+    contacts: &mut HVec<Contact, C>,
+    bodies: &Pool<Body<'_>, N>,
+    total: usize,
+    list: &mut HVec<u32, MAX_PAIR_PARTS>,
+) {
+    let old_len = contacts.len();
+    for _ in 0..total {
+        // Cannot fail: `total` is at most the room left.
+        let _ = contacts.push(Contact::default());
+    }
+    let slots = contacts.as_mut_slice();
+    let mut write = slots.len();
+    let mut read = old_len;
+    let mut missing: HVec<u32, MAX_PAIR_PARTS> = HVec::new();
+    let mut unused = 0u32;
+    while read > 0 && write > read {
+        read -= 1;
+        let Some(&(mut c)) = slots.get(read) else {
+            break;
+        };
+        let wanted = c.new_parts as usize;
+        c.new_parts = 0;
+        write -= 1;
+        if let Some(dst) = slots.get_mut(write) {
+            *dst = c;
+        }
+        if !c.is_record() || wanted == 0 {
+            continue;
+        }
+        // The same list as pass 1 (nothing changed since).
+        if listed(&c, bodies, list, &mut unused).is_none() {
+            continue;
+        }
+        // The pair's part contacts are `slots[first..read]`.
+        let key = c.key();
+        let mut first = read;
+        while first > 0 && slots.get(first - 1).is_some_and(|e| e.key() == key) {
+            first -= 1;
+        }
+        missing.clear();
+        let mut e = first;
+        for &sub in list.iter() {
+            while e < read && slots.get(e).is_some_and(|x| x.sub < sub) {
+                e += 1;
+            }
+            let exists = e < read && slots.get(e).is_some_and(|x| x.sub == sub);
+            if !exists && missing.len() < wanted {
+                // Cannot fail: `missing` holds at most the list's length.
+                let _ = missing.push(sub);
+            }
+        }
+        let (mut ei, mut mi) = (read, missing.len());
+        while ei > first || mi > 0 {
+            let next_missing = if mi > 0 { missing.get(mi - 1) } else { None };
+            let next_existing = if ei > first { slots.get(ei - 1) } else { None };
+            let moved = match (next_missing, next_existing) {
+                (Some(&m), Some(x)) if m < x.sub => Some(*x),
+                (Some(&m), _) => {
+                    mi -= 1;
+                    let mut n = Contact::new_pair(c.a, c.b, c.material, c.sensor);
+                    n.sub = m;
+                    write -= 1;
+                    if let Some(dst) = slots.get_mut(write) {
+                        *dst = n;
+                    }
+                    None
+                }
+                (None, Some(x)) => Some(*x),
+                (None, None) => break,
+            };
+            if let Some(x) = moved {
+                ei -= 1;
+                write -= 1;
+                if let Some(dst) = slots.get_mut(write) {
+                    *dst = x;
+                }
+            }
+        }
+        read = first;
+    }
+}
+
+/// Call `f` with every part of `shape` (at `pose`) whose bounds meet the world box
+/// `region`: the part's convex shape and its pose in `shape`'s frame (`None`: the same
+/// frame). A convex shape is its own only part. The order is the parts' query order.
+pub(crate) fn parts_near<'a>(
+    shape: &Shape<'a>,
+    pose: &Iso,
+    region: &Aabb,
+    mut f: impl FnMut(Shape<'a>, Option<Iso>),
+) {
+    if shape.is_convex() {
+        f(*shape, None);
+        return;
+    }
+    let local = region.transformed(&pose.inverse());
+    query_parts(shape, &local, |i| {
+        if let Some((p, at)) = part(shape, i) {
+            f(p, at);
+        }
+    });
+}
+
+/// Largest `1 − n·f` for which a triangle contact's normal `n` is taken as the face
+/// normal `f` (about 2.6°): the contact presses on the face.
+const FACE_NORMAL_COS_SLACK: f32 = 1.0e-4;
+
+/// Smallest bend (the sine of the angle the neighbour turns down by) that makes a mesh
+/// edge *active*, a real ridge whose own normals contacts may use (about 2°): a flatter
+/// or concave edge, inside a smooth surface, must not push bodies sideways.
+const ACTIVE_EDGE_SIN: f32 = 0.035;
+
+/// Internal edges (Box2D's smooth chain shapes, in 3D): a contact with triangle `tri` of
+/// `mesh` (at `mesh_pose`) whose normal is within [`FACE_NORMAL_COS_SLACK`] of the face
+/// normal takes the face normal exactly, its separations measured again along it (so a
+/// body resting on a flat mesh is pushed straight up, never sideways by rounding in an
+/// edge or GJK normal). A normal that leans further, towards an edge that is not active
+/// (shared with a neighbour that continues the surface flat or bends up), is a ghost of
+/// that seam: the contact is dropped (`m.len = 0`), since the neighbour's own contact
+/// holds the body there. Edges without a neighbour, and ridges bending down by more than
+/// [`ACTIVE_EDGE_SIN`], keep the normals the narrow phase found. `mesh_is_a` says which
+/// side of the manifold the mesh is (the normal points from A to B). Neighbours are
+/// found when needed, by the hierarchy, among the triangles that share the edge's two
+/// vertices (by index or by position).
+pub(crate) fn correct_internal_edges(
+    m: &mut Manifold,
+    mesh: &TriangleMesh<'_>,
+    tri: u32,
+    mesh_pose: &Iso,
+    mesh_is_a: bool,
+) {
+    let Some(t) = mesh.triangle(tri) else {
+        return;
+    };
+    // The manifold's normal as seen from the triangle, in the mesh's frame.
+    let sign = if mesh_is_a { 1.0 } else { -1.0 };
+    let n = mesh_pose.inverse_transform_vector(m.normal) * sign;
+    let mut f = t.normal();
+    if n.dot(f) < 0.0 {
+        f = -f; // two-sided: the side the other body is on
+    }
+    let cos = n.dot(f);
+    if cos >= 1.0 - FACE_NORMAL_COS_SLACK {
+        // The face normal: the same witness points, their gap measured along it.
+        let face = mesh_pose.transform_vector(f) * sign;
+        m.normal = face;
+        for p in m.points.iter_mut().take(usize::from(m.len)) {
+            p.separation = (p.point_b - p.point_a).dot(face);
+        }
+        return;
+    }
+    // The edge the normal leans towards: the largest share of its tangential part along
+    // the edge's outward direction in the triangle's plane.
+    let lean = n - f * cos;
+    let [p0, p1, p2] = t.vertices;
+    let centroid = (p0 + p1 + p2) * (1.0 / 3.0);
+    let mut best: Option<(usize, f32)> = None;
+    for (k, (u, v)) in [(p0, p1), (p1, p2), (p2, p0)].into_iter().enumerate() {
+        let mut out = (v - u).cross(f).normalize_or(Vec3::ZERO);
+        if out.dot(u - centroid) < 0.0 {
+            out = -out;
+        }
+        let d = out.dot(lean);
+        if best.is_none_or(|(_, b)| d > b) {
+            best = Some((k, d));
+        }
+    }
+    if let Some((edge, _)) = best {
+        if !edge_is_active(mesh, tri, edge, f) {
+            m.len = 0;
+        }
+    }
+}
+
+/// True when edge `edge` (0: v0–v1, 1: v1–v2, 2: v2–v0) of triangle `tri` has no
+/// neighbour, or its neighbour turns down from the face (normal `f`, the side in use) by
+/// more than [`ACTIVE_EDGE_SIN`] (module docs of [`correct_internal_edges`]).
+fn edge_is_active(mesh: &TriangleMesh<'_>, tri: u32, edge: usize, f: Vec3) -> bool {
+    let Some(&idx) = mesh.indices().get(tri as usize) else {
+        return true;
+    };
+    let (iu, iv) = match edge {
+        0 => (idx[0], idx[1]),
+        1 => (idx[1], idx[2]),
+        _ => (idx[2], idx[0]),
+    };
+    let vertex = |i: u32| mesh.vertices().get(i as usize).copied();
+    let (Some(u), Some(v)) = (vertex(iu), vertex(iv)) else {
+        return true;
+    };
+    let same = |i: u32, j: u32| i == j || vertex(i).is_some_and(|p| Some(p) == vertex(j));
+    let mut active = true;
+    let mut found = false;
+    mesh.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
+        if other == tri || found {
+            return;
+        }
+        let Some(&o) = mesh.indices().get(other as usize) else {
+            return;
+        };
+        let has = |x: u32| o.iter().any(|&y| same(x, y));
+        if !(has(iu) && has(iv)) {
+            return;
+        }
+        // The neighbour's third vertex: below the face's plane by more than the
+        // threshold (relative to its distance) means a ridge.
+        let Some(w) = o
+            .iter()
+            .find(|&&y| !same(iu, y) && !same(iv, y))
+            .and_then(|&y| vertex(y))
+        else {
+            return;
+        };
+        found = true;
+        let r = w - u;
+        active = f.dot(r) < -ACTIVE_EDGE_SIN * r.length();
+    });
+    active
+}
+
+/// [`correct_internal_edges`] for a part contact's manifold when one of the bodies is a
+/// mesh (`sub` the part contact's key).
+pub(crate) fn correct_mesh_contact(
+    m: &mut Manifold,
+    a: &Shape<'_>,
+    pose_a: &Iso,
+    b: &Shape<'_>,
+    pose_b: &Iso,
+    sub: u32,
+) {
+    let Some(k) = sub.checked_sub(1) else {
+        return;
+    };
+    let nb = part_count(b).max(1);
+    if let Shape::Mesh(mesh) = a {
+        correct_internal_edges(m, mesh, k / nb, pose_a, true);
+    } else if let Shape::Mesh(mesh) = b {
+        correct_internal_edges(m, mesh, k % nb, pose_b, false);
+    }
+}
+
+/// Smallest `cos` between two part contacts' normals for them to count as one patch in
+/// [`merge_patches`] (about 1.8°): the triangles of a flat or gently curved mesh.
+pub(crate) const PATCH_NORMAL_COS: f32 = 0.9995;
+
+/// Per body pair, after a rebuild: part contacts whose normals agree within
+/// [`PATCH_NORMAL_COS`] form one patch (a box on a flat mesh touches many triangles,
+/// each with up to four points), whose points are reduced to the four a single plane
+/// would give and moved into the patch's first contact (in key order), its *owner*; the
+/// others keep no points. One patch is one contact to the solver, with one friction
+/// patch, as on a single plane: a ring of redundant points makes a stiff, jittery
+/// support that bounces and twists a landing body, and separate friction patches drag
+/// unevenly. The four: among the points within `slop` of the deepest, the one furthest
+/// from the points' centroid; then the furthest from it, the one spanning the largest
+/// triangle with those, and the one adding the most area to that triangle (positions in
+/// A's frame, ties to the earlier contact and point); points closer than `slop` to a
+/// kept one count as the same point. Patches are grouped in key order, each around the
+/// normal of its first contact. Sets each contact's `touching` from what it keeps.
+pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
+    let mut grouped = [false; MAX_PAIR_PARTS];
+    for start in 0..group.len().min(MAX_PAIR_PARTS) {
+        let Some(first) = group.get(start) else {
+            break;
+        };
+        if first.len == 0 || grouped.get(start).copied().unwrap_or(true) {
+            continue;
+        }
+        let n = first.normal;
+        // The patch's points: (contact, point) indices.
+        let mut points: HVec<(u8, u8), { MAX_PAIR_PARTS * 4 }> = HVec::new();
+        for (k, c) in group
+            .iter()
+            .enumerate()
+            .skip(start)
+            .take(MAX_PAIR_PARTS - start)
+        {
+            let free = !grouped.get(k).copied().unwrap_or(true);
+            if free && c.len > 0 && c.normal.dot(n) >= PATCH_NORMAL_COS {
+                if let Some(g) = grouped.get_mut(k) {
+                    *g = true;
+                }
+                for i in 0..c.len {
+                    // Cannot fail: at most 4 points for each of at most 64 contacts.
+                    let _ = points.push((k as u8, i));
+                }
+            }
+        }
+        let point = |&(k, i): &(u8, u8)| {
+            group
+                .get(usize::from(k))
+                .and_then(|c| c.points.get(usize::from(i)))
+                .copied()
+                .unwrap_or_default()
+        };
+        let keep: HVec<ContactPoint, 4> = choose_four(&points, &point, slop)
+            .iter()
+            .map(&point)
+            .collect();
+        for &(k, _) in &points {
+            if let Some(c) = group.get_mut(usize::from(k)) {
+                c.len = 0;
+            }
+        }
+        if let Some(owner) = group.get_mut(start) {
+            for (dst, p) in owner.points.iter_mut().zip(keep.iter()) {
+                *dst = *p;
+            }
+            owner.len = keep.len() as u8;
+        }
+    }
+    for c in group.iter_mut() {
+        c.touching = c.points().iter().any(|p| p.separation <= slop);
+    }
+}
+
+/// The (at most) four points of a patch [`merge_patches`] keeps, as their indices.
+fn choose_four(
+    points: &[(u8, u8)],
+    point: &dyn Fn(&(u8, u8)) -> ContactPoint,
+    slop: f32,
+) -> HVec<(u8, u8), 4> {
+    let mut keep: HVec<(u8, u8), 4> = HVec::new();
+    let mut at: HVec<Vec3, 4> = HVec::new();
+    let area = |u: Vec3, v: Vec3, w: Vec3| scalar::sqrt((v - u).cross(w - u).length_squared());
+    // The first point: the one furthest from the points' centroid among those within a
+    // slop of the deepest (on a flat patch, a corner of the footprint).
+    let mut deepest = f32::INFINITY;
+    let mut sum = Vec3::ZERO;
+    for key in points {
+        let p = point(key);
+        deepest = scalar::min(deepest, p.separation);
+        sum += p.local_a;
+    }
+    let centroid = sum * (1.0 / points.len().max(1) as f32);
+    for _ in 0..4 {
+        let score = |p: &ContactPoint| -> f32 {
+            let x = p.local_a;
+            match at.as_slice() {
+                [] if p.separation <= deepest + slop => (x - centroid).length_squared(),
+                [] => f32::NEG_INFINITY,
+                [x1] => (x - *x1).length_squared(),
+                [x1, x2] => (*x2 - *x1).cross(x - *x1).length_squared(),
+                [x1, x2, x3, ..] => area(*x1, *x2, x) + area(*x2, *x3, x) + area(*x3, *x1, x),
+            }
+        };
+        let mut best: Option<((u8, u8), Vec3, f32)> = None;
+        for key in points {
+            let p = point(key);
+            // A point on top of a kept one adds nothing (nor does a kept one).
+            if at
+                .iter()
+                .any(|k| (p.local_a - *k).length_squared() <= slop * slop)
+            {
+                continue;
+            }
+            let v = score(&p);
+            if best.is_none_or(|(_, _, b)| v > b) {
+                best = Some((*key, p.local_a, v));
+            }
+        }
+        let Some((key, x, _)) = best else {
+            break;
+        };
+        // Cannot fail: four rounds.
+        let _ = keep.push(key);
+        let _ = at.push(x);
+    }
+    keep
+}

@@ -1,0 +1,358 @@
+//! The mid phase in the world: bodies on triangle meshes behave like bodies on one
+//! plane, compounds rest on their parts, fast bodies do not tunnel through a mesh, and
+//! queries and snapshots reach into meshes and compounds.
+
+use carom::shape::{BvhNode, Compound, CompoundPart, TriangleMesh};
+use carom::{BodyDesc, Iso, Material, QueryFilter, Ray, Shape, Vec3, World};
+
+/// A flat grid of `n × n` square cells of `cell` metres at height 0, centred on the
+/// origin, two triangles per cell (counter-clockwise seen from +Y).
+fn flat_grid(n: u32, cell: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let half = n as f32 * cell * 0.5;
+    let mut v = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            v.push(Vec3::new(
+                i as f32 * cell - half,
+                0.0,
+                j as f32 * cell - half,
+            ));
+        }
+    }
+    let mut t = Vec::new();
+    let at = |i: u32, j: u32| j * (n + 1) + i;
+    for j in 0..n {
+        for i in 0..n {
+            t.push([at(i, j), at(i, j + 1), at(i + 1, j + 1)]);
+            t.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
+        }
+    }
+    (v, t)
+}
+
+type Small<'a> = World<'a, 16, 512>;
+
+/// Run `steps` steps and give the body's (position, velocity) after each.
+fn track(world: &mut Small<'_>, h: carom::BodyHandle, steps: usize) -> Vec<(Vec3, Vec3)> {
+    (0..steps)
+        .map(|_| {
+            world.step();
+            let b = world.body(h).unwrap();
+            (b.position(), b.linear_velocity())
+        })
+        .collect()
+}
+
+/// A unit box (half 0.5) dropped from 0.2 m above a ground at y = 0, on a flat mesh of
+/// 0.4 m cells (the box spans several triangles) or on a box ground: the same resting
+/// height, no bounce on the seams.
+#[test]
+fn a_box_rests_on_a_tessellated_plane_as_on_one_plane() {
+    let (v, t) = flat_grid(24, 0.4);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let rest = |ground: BodyDesc<'_>| {
+        let mut w: Small<'_> = World::new();
+        w.add(ground).unwrap();
+        let q = carom::Quat::from_axis_angle(Vec3::Y, 0.3);
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::cuboid(Vec3::splat(0.5)).unwrap())
+                    .position(Vec3::new(0.13, 0.7, -0.21))
+                    .rotation(q),
+            )
+            .unwrap();
+        track(&mut w, h, 180)
+    };
+    let on_mesh = rest(BodyDesc::fixed(Shape::Mesh(&mesh)));
+    let on_box = rest(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    );
+    let (mesh_end, box_end) = (on_mesh.last().unwrap().0, on_box.last().unwrap().0);
+    assert!(
+        (mesh_end.y - box_end.y).abs() < 1e-3,
+        "{mesh_end:?} vs {box_end:?}"
+    );
+    assert!((mesh_end.y - 0.5).abs() < 5e-3, "rests at {}", mesh_end.y);
+    // It came to rest where it landed: no sideways walk on the seams.
+    assert!(
+        (mesh_end.x - 0.13).abs() < 2e-3 && (mesh_end.z + 0.21).abs() < 2e-3,
+        "{mesh_end:?} vs box {box_end:?}"
+    );
+    // After landing (the first 0.5 s), no vertical kick.
+    for (p, vel) in &on_mesh[30..] {
+        assert!(vel.y.abs() < 0.05, "vertical speed {} at {p:?}", vel.y);
+    }
+}
+
+/// A box sliding at 4 m/s across 0.25 m triangles slows at the same rate as on a box
+/// ground (kinetic friction), with no vertical velocity spike on the seams.
+#[test]
+fn a_box_slides_across_triangle_seams_like_on_one_plane() {
+    let (v, t) = flat_grid(40, 0.25);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let slide = |ground: BodyDesc<'_>| {
+        let mut w: Small<'_> = World::new();
+        w.add(ground).unwrap();
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::cuboid(Vec3::new(0.3, 0.2, 0.3)).unwrap())
+                    .position(Vec3::new(-3.0, 0.2, 0.07))
+                    .velocity(Vec3::new(4.0, 0.0, 0.0)),
+            )
+            .unwrap();
+        track(&mut w, h, 90)
+    };
+    let on_mesh = slide(BodyDesc::fixed(Shape::Mesh(&mesh)));
+    let on_box = slide(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    );
+    let stop = |track: &[(Vec3, Vec3)]| track.last().unwrap().0.x;
+    let (d_mesh, d_box) = (stop(&on_mesh) + 3.0, stop(&on_box) + 3.0);
+    // v² / (2 μk g) = 16 / (2 · 0.4 · 9.81) = 2.04 m.
+    assert!((d_box - 2.04).abs() < 0.1, "box ground: {d_box}");
+    assert!(
+        (d_mesh - d_box).abs() < 0.02 * d_box,
+        "mesh {d_mesh} vs box {d_box}"
+    );
+    for (p, vel) in &on_mesh {
+        assert!(vel.y.abs() < 0.05, "vertical speed {} at {p:?}", vel.y);
+        assert!(vel.z.abs() < 0.02, "sideways speed {} at {p:?}", vel.z);
+    }
+}
+
+/// A ball rolling across the seams of a mesh keeps the speed it has on one plane.
+#[test]
+fn a_ball_rolls_across_seams_without_losing_speed() {
+    let (v, t) = flat_grid(20, 0.5);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let roll = |ground: BodyDesc<'_>| {
+        let mut w: Small<'_> = World::new();
+        w.add(ground).unwrap();
+        let r = 0.25;
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::sphere(r).unwrap())
+                    .position(Vec3::new(-4.0, r, 0.1))
+                    .velocity(Vec3::new(2.0, 0.0, 0.0))
+                    .angular_velocity(Vec3::new(0.0, 0.0, -2.0 / r)),
+            )
+            .unwrap();
+        track(&mut w, h, 120)
+    };
+    let on_mesh = roll(BodyDesc::fixed(Shape::Mesh(&mesh)));
+    let on_box = roll(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    );
+    let (vm, vb) = (on_mesh.last().unwrap().1, on_box.last().unwrap().1);
+    assert!(vb.x > 1.8, "rolling on a box ground: {vb:?}");
+    assert!((vm.x - vb.x).abs() < 0.02, "mesh {vm:?} vs box {vb:?}");
+    for (p, vel) in &on_mesh {
+        assert!(vel.y.abs() < 0.05, "vertical speed {} at {p:?}", vel.y);
+        assert!((p.y - 0.25).abs() < 5e-3, "height {} at {p:?}", p.y);
+    }
+}
+
+/// A dumbbell (two balls on a bar) dropped on the ground rests on both balls, level.
+#[test]
+fn a_compound_rests_on_its_parts() {
+    let parts = [
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(-0.6, 0.0, 0.0)),
+            Shape::sphere(0.2).unwrap(),
+        ),
+        CompoundPart::new(
+            Iso::IDENTITY,
+            Shape::cuboid(Vec3::new(0.5, 0.05, 0.05)).unwrap(),
+        ),
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(0.6, 0.0, 0.0)),
+            Shape::sphere(0.2).unwrap(),
+        ),
+    ];
+    let dumbbell = Compound::new(&parts).unwrap();
+    let mut w: Small<'_> = World::new();
+    w.add(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    )
+    .unwrap();
+    let h = w
+        .add(BodyDesc::dynamic(Shape::Compound(&dumbbell)).position(Vec3::new(0.0, 1.0, 0.0)))
+        .unwrap();
+    let end = track(&mut w, h, 240);
+    let b = w.body(h).unwrap();
+    assert!(
+        (b.position().y - 0.2).abs() < 5e-3,
+        "rests at {:?}",
+        b.position()
+    );
+    // Level: the bar's axis stays horizontal.
+    let axis = b.rotation().rotate(Vec3::X);
+    assert!(axis.y.abs() < 1e-2, "tilted: {axis:?}");
+    assert!(end.last().unwrap().1.length() < 0.05);
+    // The two balls touch the ground, the bar does not: one patch of two points.
+    assert_eq!(w.contact_count(), 1);
+    assert_eq!(w.last_report().points, 2);
+}
+
+/// A small fast ball (ccd on) fired down at a mesh one triangle thick stops on it.
+#[test]
+fn a_fast_ball_does_not_tunnel_through_a_mesh() {
+    let (v, t) = flat_grid(8, 1.0);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let mut w: Small<'_> = World::new();
+    w.add(BodyDesc::fixed(Shape::Mesh(&mesh))).unwrap();
+    let h = w
+        .add(
+            BodyDesc::dynamic(Shape::sphere(0.05).unwrap())
+                .position(Vec3::new(0.3, 2.0, 0.2))
+                .velocity(Vec3::new(0.0, -150.0, 0.0))
+                .ccd(true),
+        )
+        .unwrap();
+    let mut lowest = f32::INFINITY;
+    for _ in 0..60 {
+        w.step();
+        lowest = lowest.min(w.body(h).unwrap().position().y);
+    }
+    assert!(lowest > 0.0, "tunnelled to {lowest}");
+    assert!((w.body(h).unwrap().position().y - 0.05).abs() < 0.01);
+}
+
+/// Ray casts and overlap queries reach into meshes and compounds.
+#[test]
+fn queries_reach_into_meshes_and_compounds() {
+    let (v, t) = flat_grid(8, 1.0);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let parts = [
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(-1.0, 0.0, 0.0)),
+            Shape::sphere(0.5).unwrap(),
+        ),
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(1.0, 0.0, 0.0)),
+            Shape::sphere(0.5).unwrap(),
+        ),
+    ];
+    let pair = Compound::new(&parts).unwrap();
+    let mut w: Small<'_> = World::new();
+    let ground = w
+        .add(BodyDesc::fixed(Shape::Mesh(&mesh)).position(Vec3::new(0.0, -1.0, 0.0)))
+        .unwrap();
+    let balls = w
+        .add(BodyDesc::fixed(Shape::Compound(&pair)).position(Vec3::new(0.0, 2.0, 0.0)))
+        .unwrap();
+    let down = |x: f32| Ray::new(Vec3::new(x, 10.0, 0.0), -Vec3::Y).unwrap();
+    // Between the balls the ray meets the mesh; over a ball, the ball.
+    let hit = w
+        .cast_ray(&down(0.0), 100.0, QueryFilter::default())
+        .unwrap()
+        .unwrap();
+    assert_eq!(hit.body, ground);
+    assert!((hit.t - 11.0).abs() < 1e-5);
+    let hit = w
+        .cast_ray(&down(1.0), 100.0, QueryFilter::default())
+        .unwrap()
+        .unwrap();
+    assert_eq!(hit.body, balls);
+    assert!((hit.t - 7.5).abs() < 1e-5);
+    // A small box between the balls touches neither; on a ball, that ball's body.
+    let probe = Shape::cuboid(Vec3::splat(0.1)).unwrap();
+    let mut out = [ground; 4];
+    let at = |x: f32, y: f32| Iso::from_position(Vec3::new(x, y, 0.0));
+    let n = w
+        .overlap(&probe, &at(0.0, 2.0), QueryFilter::default(), &mut out)
+        .unwrap();
+    assert_eq!(n, 0);
+    let n = w
+        .overlap(&probe, &at(1.0, 2.5), QueryFilter::default(), &mut out)
+        .unwrap();
+    assert_eq!(&out[..n], &[balls]);
+    let n = w
+        .overlap(&probe, &at(3.3, -1.05), QueryFilter::default(), &mut out)
+        .unwrap();
+    assert_eq!(&out[..n], &[ground]);
+}
+
+/// A world with a mesh ground and a compound restores from its snapshot and replays
+/// bit for bit; the convex-shape queries refuse meshes and compounds.
+#[test]
+fn snapshots_carry_mesh_and_compound_worlds() {
+    let (v, t) = flat_grid(12, 0.5);
+    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let parts = [
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(-0.4, 0.0, 0.0)),
+            Shape::cuboid(Vec3::splat(0.2)).unwrap(),
+        ),
+        CompoundPart::new(
+            Iso::from_position(Vec3::new(0.4, 0.1, 0.0)),
+            Shape::sphere(0.25).unwrap(),
+        ),
+    ];
+    let c = Compound::new(&parts).unwrap();
+    let mut w: Small<'_> = World::new();
+    w.add(BodyDesc::fixed(Shape::Mesh(&mesh))).unwrap();
+    for k in 0..4 {
+        w.add(
+            BodyDesc::dynamic(Shape::Compound(&c))
+                .position(Vec3::new(
+                    k as f32 * 0.7 - 1.0,
+                    0.6 + 0.5 * k as f32,
+                    0.1 * k as f32,
+                ))
+                .angular_velocity(Vec3::new(0.3, 1.0, -0.2))
+                .material(Material {
+                    restitution: 0.3,
+                    ..Material::DEFAULT
+                }),
+        )
+        .unwrap();
+    }
+    for _ in 0..40 {
+        w.step();
+    }
+    assert!(w.contact_count() > 0);
+    let mut buf = vec![0u8; w.snapshot_len()];
+    let n = w.snapshot(&mut buf).unwrap();
+    let mut replay: Vec<u64> = Vec::new();
+    for _ in 0..40 {
+        w.step();
+        replay.push(w.checksum());
+    }
+    let mut again: Small<'_> = World::new();
+    again.add(BodyDesc::fixed(Shape::Mesh(&mesh))).unwrap();
+    again.add(BodyDesc::dynamic(Shape::Compound(&c))).unwrap();
+    again.restore(&buf[..n]).unwrap();
+    for want in replay {
+        again.step();
+        assert_eq!(again.checksum(), want);
+    }
+    // A world without the mesh cannot restore it.
+    let mut bare: Small<'_> = World::new();
+    bare.add(BodyDesc::dynamic(Shape::Compound(&c))).unwrap();
+    assert_eq!(
+        bare.restore(&buf[..n]),
+        Err(carom::Error::Snapshot(carom::SnapshotError::MissingShape))
+    );
+    // The narrow-phase doors refuse shapes with parts.
+    let ball = Shape::sphere(0.5).unwrap();
+    let far = Iso::from_position(Vec3::new(0.0, 3.0, 0.0));
+    assert_eq!(
+        carom::collide::contact(&Shape::Mesh(&mesh), &Iso::IDENTITY, &ball, &far, 0.1),
+        Err(carom::Error::NotConvex)
+    );
+    assert_eq!(
+        carom::collide::separation(&ball, &far, &Shape::Compound(&c), &Iso::IDENTITY).map(|_| ()),
+        Err(carom::Error::NotConvex)
+    );
+}
