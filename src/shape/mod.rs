@@ -8,6 +8,7 @@
 
 mod capsule;
 mod cuboid;
+mod heightfield;
 mod hull;
 mod mesh;
 mod plane;
@@ -16,6 +17,7 @@ mod triangle;
 
 pub use capsule::Capsule;
 pub use cuboid::Cuboid;
+pub use heightfield::{HeightField, MAX_HEIGHT_FIELD_CELLS};
 pub(crate) use hull::EDGE_TILT_SIN;
 pub use hull::{
     ConvexHull, MAX_HULL_EDGES, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES,
