@@ -290,6 +290,17 @@ impl<'a> HeightField<'a> {
     /// the answer equals the brute-force one over every triangle. A vertical ray visits
     /// the cell under it (and its neighbours when it is within the margin of their edge).
     pub fn cast_ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, RayHit)> {
+        self.walk_ray(ray, max_t, |_, _| {})
+    }
+
+    /// [`HeightField::cast_ray`], calling `on_cell` with each cell `(i, j)` it visits (the
+    /// tests count them).
+    fn walk_ray(
+        &self,
+        ray: &Ray,
+        max_t: f32,
+        mut on_cell: impl FnMut(u32, u32),
+    ) -> Option<(u32, RayHit)> {
         if !(max_t >= 0.0 && ray.origin.is_finite() && ray.direction.is_finite()) {
             return None;
         }
@@ -340,6 +351,7 @@ impl<'a> HeightField<'a> {
             };
             for j in j0..=j1 {
                 for i in i0..=i1 {
+                    on_cell(i, j);
                     self.cast_cell(ray, max_t, i, j, &mut best);
                 }
             }
@@ -381,8 +393,10 @@ impl<'a> HeightField<'a> {
             };
             for r in r0..=r1 {
                 if x_major {
+                    on_cell(c, r);
                     self.cast_cell(ray, max_t, c, r, &mut best);
                 } else {
+                    on_cell(r, c);
                     self.cast_cell(ray, max_t, r, c, &mut best);
                 }
             }
@@ -519,5 +533,693 @@ fn axis(v: Vec3, k: usize) -> f32 {
         0 => v.x,
         1 => v.y,
         _ => v.z,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+    use std::vec::Vec;
+
+    /// A bumpy `columns × rows` grid: heights in `[-1, 2]` m, a third of them rounded to
+    /// 0.5 m so flat patches, shared heights and exactly touching boxes are common.
+    fn bumpy(rng: &mut SplitMix64, columns: u32, rows: u32) -> Vec<f32> {
+        (0..columns * rows)
+            .map(|_| {
+                let h = rng.range(-1.0, 2.0);
+                if rng.next_u64().is_multiple_of(3) {
+                    (h * 2.0) as i32 as f32 * 0.5
+                } else {
+                    h
+                }
+            })
+            .collect()
+    }
+
+    /// The grids the comparisons run on: (heights, columns, rows, cell size).
+    fn fields() -> Vec<(Vec<f32>, u32, u32, f32)> {
+        let mut rng = SplitMix64::new(41);
+        let mut out = Vec::new();
+        for (c, r, cs) in [
+            (2, 2, 1.0),
+            (3, 7, 0.37),
+            (33, 17, 1.0),
+            (33, 17, 0.25),
+            (17, 33, 2.5),
+        ] {
+            out.push((bumpy(&mut rng, c, r), c, r, cs));
+        }
+        out
+    }
+
+    /// The bounding box of a triangle's three vertices.
+    fn tri_box(tri: &Triangle) -> Aabb {
+        let [a, b, c] = tri.vertices;
+        Aabb::new(a.min(b).min(c), a.max(b).max(c))
+    }
+
+    fn brute_query(field: &HeightField, q: &Aabb) -> Vec<u32> {
+        (0..field.triangle_count())
+            .filter(|&t| tri_box(&field.triangle(t).unwrap()).overlaps(q))
+            .collect()
+    }
+
+    fn brute_ray(field: &HeightField, ray: &Ray, max_t: f32) -> Option<(u32, RayHit)> {
+        let mut best: Option<(u32, RayHit)> = None;
+        for i in 0..field.triangle_count() {
+            if let Some(h) = field.triangle(i).unwrap().cast_ray(ray, max_t) {
+                if best.is_none_or(|(_, b)| h.t < b.t) {
+                    best = Some((i, h));
+                }
+            }
+        }
+        best
+    }
+
+    /// A random sample coordinate of the grid (exactly a vertex's x or z).
+    fn grid_coord(rng: &mut SplitMix64, field: &HeightField, n: u32) -> f32 {
+        field.coord((rng.next_u64() % u64::from(n)) as u32)
+    }
+
+    #[test]
+    fn layout_and_bounds() {
+        let heights = [0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 9.0];
+        let f = HeightField::new(&heights, 3, 2, 0.5).unwrap();
+        assert_eq!(f.triangle_count(), 4);
+        assert_eq!((f.columns(), f.rows(), f.cell_size()), (3, 2, 0.5));
+        assert_eq!(f.heights(), &heights[..6], "extra entries are not in use");
+        assert_eq!(
+            f.aabb(),
+            Aabb::new(Vec3::ZERO, Vec3::new(1.0, 5.0, 0.5)),
+            "9.0 is past columns · rows"
+        );
+        let v = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+        // Cell (1, 0): p00 = (0.5, 1, 0), p10 = (1, 2, 0), p01 = (0.5, 4, 0.5),
+        // p11 = (1, 5, 0.5).
+        assert_eq!(
+            f.triangle(2).unwrap().vertices,
+            [v(0.5, 1.0, 0.0), v(1.0, 5.0, 0.5), v(1.0, 2.0, 0.0)]
+        );
+        assert_eq!(
+            f.triangle(3).unwrap().vertices,
+            [v(0.5, 1.0, 0.0), v(0.5, 4.0, 0.5), v(1.0, 5.0, 0.5)]
+        );
+        assert_eq!(
+            f.triangle(0).unwrap().vertices,
+            [v(0.0, 0.0, 0.0), v(0.5, 4.0, 0.5), v(0.5, 1.0, 0.0)]
+        );
+        assert_eq!(f.triangle(4), None);
+        assert_eq!(f.triangle(u32::MAX), None);
+        // Negative heights: the box's y range is the heights', not from 0.
+        let neg = [-3.0, -2.0, -2.5, -1.5];
+        let f = HeightField::new(&neg, 2, 2, 1.0).unwrap();
+        assert_eq!(f.aabb().min.y, -3.0);
+        assert_eq!(f.aabb().max.y, -1.5);
+        // Every triangle index maps to its cell: its vertices' x and z span the cell.
+        for (h, c, r, cs) in fields() {
+            let f = HeightField::new(&h, c, r, cs).unwrap();
+            assert_eq!(f.triangle_count(), 2 * (c - 1) * (r - 1));
+            let mut whole = tri_box(&f.triangle(0).unwrap());
+            for t in 0..f.triangle_count() {
+                let b = tri_box(&f.triangle(t).unwrap());
+                let (i, j) = ((t / 2) % (c - 1), (t / 2) / (c - 1));
+                assert_eq!((b.min.x, b.max.x), (i as f32 * cs, (i + 1) as f32 * cs));
+                assert_eq!((b.min.z, b.max.z), (j as f32 * cs, (j + 1) as f32 * cs));
+                whole = whole.union(&b);
+            }
+            assert_eq!(whole, f.aabb());
+        }
+    }
+
+    #[test]
+    fn triangles_wind_counter_clockwise_from_above() {
+        let mut rng = SplitMix64::new(7);
+        let mut checked = 0;
+        for (h, c, r, cs) in fields() {
+            let f = HeightField::new(&h, c, r, cs).unwrap();
+            for t in 0..f.triangle_count() {
+                let tri = f.triangle(t).unwrap();
+                let [a, b, c] = tri.vertices;
+                assert!((b - a).cross(c - a).y > 0.0, "triangle {t}");
+                assert!(tri.normal().y > 0.0, "triangle {t}");
+                checked += 1;
+            }
+        }
+        // Steep fields too: heights up to ±100 m over 1 cm cells.
+        let h: Vec<f32> = (0..64).map(|_| rng.range(-100.0, 100.0)).collect();
+        let f = HeightField::new(&h, 8, 8, 0.01).unwrap();
+        for t in 0..f.triangle_count() {
+            assert!(f.triangle(t).unwrap().normal().y > 0.0);
+            checked += 1;
+        }
+        assert_eq!(checked, 2 * (1 + 12 + 512 + 512 + 512) + 98);
+        // A flat field: straight up, exactly for power-of-two cells.
+        for cs in [1.0, 0.5, 0.25, 2.0, 0.37, 3.3] {
+            let flat = [1.5f32; 12];
+            let f = HeightField::new(&flat, 4, 3, cs).unwrap();
+            for t in 0..f.triangle_count() {
+                let n = f.triangle(t).unwrap().normal();
+                assert_eq!((n.x, n.z), (0.0, 0.0));
+                if [1.0, 0.5, 0.25, 2.0].contains(&cs) {
+                    assert_eq!(n, Vec3::Y, "cell {cs}");
+                } else {
+                    assert!((n.y - 1.0).abs() <= 2.0 * f32::EPSILON, "{n:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn query_aabb_matches_brute_force() {
+        let mut rng = SplitMix64::new(5);
+        let (mut queries, mut empty, mut reported, mut touching) = (0usize, 0usize, 0usize, 0);
+        for (h, c, r, cs) in fields() {
+            let f = HeightField::new(&h, c, r, cs).unwrap();
+            let world = f.aabb();
+            let count = if f.triangle_count() > 100 { 3000 } else { 1000 };
+            for q in 0..count {
+                let mut center = Vec3::new(
+                    rng.range(world.min.x - 3.0, world.max.x + 3.0),
+                    rng.range(world.min.y - 2.0, world.max.y + 2.0),
+                    rng.range(world.min.z - 3.0, world.max.z + 3.0),
+                );
+                let scale = [0.0, 0.01, 0.3, 1.0, 4.0, 12.0, 1.0e3][q % 7];
+                let half = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) * scale;
+                let mut query = Aabb::from_center_half(center, half);
+                match q % 5 {
+                    // A face exactly on a grid line or a height: touching counts.
+                    1 => {
+                        query.min.x = grid_coord(&mut rng, &f, c);
+                        query.max.z = grid_coord(&mut rng, &f, r);
+                        query.min.z = scalar::min(query.min.z, query.max.z);
+                        query.max.x = scalar::max(query.max.x, query.min.x);
+                        let k = (rng.next_u64() % h.len() as u64) as usize;
+                        query.max.y = h[k];
+                        query.min.y = scalar::min(query.min.y, h[k]);
+                    }
+                    2 => {
+                        query.max.x = grid_coord(&mut rng, &f, c);
+                        query.min.x = scalar::min(query.min.x, query.max.x);
+                        let k = (rng.next_u64() % h.len() as u64) as usize;
+                        query.min.y = h[k];
+                        query.max.y = scalar::max(query.max.y, h[k]);
+                        touching += 1;
+                    }
+                    // Inverted on one axis (min > max): Aabb::overlaps still answers.
+                    3 if q % 2 == 0 => {
+                        center.x = query.min.x;
+                        query.min.x = query.max.x;
+                        query.max.x = center.x;
+                    }
+                    _ => {}
+                }
+                let mut got = Vec::new();
+                f.query_aabb(&query, |t| got.push(t));
+                let want = brute_query(&f, &query);
+                assert_eq!(got, want, "query {query:?} on {c} × {r}");
+                queries += 1;
+                empty += usize::from(got.is_empty());
+                reported += got.len();
+            }
+            // Huge and infinite boxes hold everything; a NaN anywhere overlaps nothing.
+            let all: Vec<u32> = (0..f.triangle_count()).collect();
+            for big in [1.0e30, f32::INFINITY, MAX_COORDINATE] {
+                let q = Aabb::new(Vec3::splat(-big), Vec3::splat(big));
+                let mut got = Vec::new();
+                f.query_aabb(&q, |t| got.push(t));
+                assert_eq!(got, all);
+            }
+            for k in 0..6 {
+                let mut q = Aabb::new(Vec3::splat(-1.0e3), Vec3::splat(1.0e3));
+                match k {
+                    0 => q.min.x = f32::NAN,
+                    1 => q.max.x = f32::NAN,
+                    2 => q.min.y = f32::NAN,
+                    3 => q.max.y = f32::NAN,
+                    4 => q.min.z = f32::NAN,
+                    _ => q.max.z = f32::NAN,
+                }
+                f.query_aabb(&q, |_| panic!("a NaN box overlaps nothing"));
+                assert!(brute_query(&f, &q).is_empty());
+            }
+        }
+        assert_eq!(queries, 2 * 1000 + 3 * 3000);
+        assert!(empty * 5 > queries, "{empty} of {queries} empty");
+        assert!(
+            (queries - empty) * 2 > queries,
+            "{empty} of {queries} empty"
+        );
+        assert!(reported > 10 * queries, "{reported} reported");
+        assert!(touching > 1000);
+    }
+
+    /// A random ray of kind `q % 8` for `f`.
+    fn random_ray(rng: &mut SplitMix64, f: &HeightField, q: usize) -> Ray {
+        let w = f.aabb();
+        let inside = |rng: &mut SplitMix64| {
+            Vec3::new(
+                rng.range(w.min.x, w.max.x),
+                rng.range(w.min.y, w.max.y),
+                rng.range(w.min.z, w.max.z),
+            )
+        };
+        let towards = |o: Vec3, target: Vec3| {
+            Ray::new(o, target - o).unwrap_or(Ray {
+                origin: o,
+                direction: -Vec3::Y,
+            })
+        };
+        match q % 8 {
+            // Anywhere near the field, any direction.
+            0 => Ray {
+                origin: Vec3::new(
+                    rng.range(w.min.x - 3.0, w.max.x + 3.0),
+                    rng.range(w.min.y - 3.0, w.max.y + 3.0),
+                    rng.range(w.min.z - 3.0, w.max.z + 3.0),
+                ),
+                direction: rng.unit_vector(),
+            },
+            // Straight down (or up) onto a vertex, an edge or anywhere: ties and edges.
+            1 => {
+                let mut o = inside(rng);
+                if rng.next_u64().is_multiple_of(2) {
+                    o.x = grid_coord(rng, f, f.columns());
+                }
+                if rng.next_u64().is_multiple_of(2) {
+                    o.z = grid_coord(rng, f, f.rows());
+                }
+                let up = rng.next_u64().is_multiple_of(4);
+                o.y = if up { w.min.y - 1.0 } else { w.max.y + 1.0 };
+                Ray {
+                    origin: o,
+                    direction: if up { Vec3::Y } else { -Vec3::Y },
+                }
+            }
+            // From above towards a point of the field.
+            2 => {
+                let mut o = inside(rng);
+                o.y = w.max.y + rng.range(0.1, 4.0);
+                let t = inside(rng);
+                towards(o, t)
+            }
+            // From the side, outside the grid, low and nearly horizontal.
+            3 => {
+                let side = rng.next_u64() % 4;
+                let mut o = inside(rng);
+                match side {
+                    0 => o.x = w.min.x - rng.range(0.1, 5.0),
+                    1 => o.x = w.max.x + rng.range(0.1, 5.0),
+                    2 => o.z = w.min.z - rng.range(0.1, 5.0),
+                    _ => o.z = w.max.z + rng.range(0.1, 5.0),
+                }
+                let mut t = inside(rng);
+                t.y = o.y + rng.range(-0.3, 0.3);
+                towards(o, t)
+            }
+            // Grazing: nearly horizontal from inside the grid's XZ range.
+            4 => {
+                let o = inside(rng);
+                let a = rng.range(0.0, core::f32::consts::TAU);
+                let dy = [0.0, 1.0e-4, -1.0e-3, 0.02][rng.next_u64() as usize % 4];
+                Ray::new(o, Vec3::new(scalar::cos(a), dy, scalar::sin(a))).unwrap()
+            }
+            // Along a grid line (x or z exactly a sample's), slanted.
+            5 => {
+                let mut o = inside(rng);
+                o.y = w.max.y + 0.5;
+                o.x = grid_coord(rng, f, f.columns());
+                let d = Vec3::new(0.0, -rng.range(0.1, 1.0), rng.range(-1.0, 1.0));
+                Ray::new(o, d).unwrap()
+            }
+            // Diagonal through the cells' corners (along p00–p11 or across it).
+            6 => {
+                let o = Vec3::new(
+                    grid_coord(rng, f, f.columns()),
+                    w.max.y + 0.5,
+                    grid_coord(rng, f, f.rows()),
+                );
+                let sx = if rng.next_u64().is_multiple_of(2) {
+                    1.0
+                } else {
+                    -1.0
+                };
+                let d = Vec3::new(sx, -rng.range(0.05, 1.0), 1.0);
+                Ray::new(o, d).unwrap()
+            }
+            // Far away, towards the field.
+            _ => {
+                let o = rng.unit_vector() * rng.range(100.0, 5000.0) + w.max;
+                let t = inside(rng);
+                towards(o, t)
+            }
+        }
+    }
+
+    #[test]
+    fn cast_ray_matches_brute_force() {
+        let mut rng = SplitMix64::new(17);
+        let (mut hits, mut misses, mut ties, mut rays) = (0usize, 0usize, 0usize, 0usize);
+        let (mut visited, mut all_cells) = (0usize, 0usize);
+        for (h, c, r, cs) in fields() {
+            let f = HeightField::new(&h, c, r, cs).unwrap();
+            let count = if f.triangle_count() > 100 { 3000 } else { 800 };
+            for q in 0..count {
+                let mut ray = random_ray(&mut rng, &f, q);
+                // Some directions not of unit length (the public fields allow it).
+                if q % 11 == 0 {
+                    ray.direction = ray.direction * [0.01, 100.0][q % 2];
+                }
+                let max_t = [f32::INFINITY, 1.0, 5.0, 30.0, 0.3, 0.0][q % 6];
+                let mut cells = Vec::new();
+                let got = f.walk_ray(&ray, max_t, |i, j| cells.push((i, j)));
+                assert_eq!(got, f.cast_ray(&ray, max_t));
+                let want = brute_ray(&f, &ray, max_t);
+                assert_eq!(got, want, "ray {ray:?} max_t {max_t} on {c} × {r}");
+                // Each cell at most once, all on the grid.
+                let n = cells.len();
+                cells.sort_unstable();
+                cells.dedup();
+                assert_eq!(cells.len(), n, "a cell visited twice");
+                assert!(cells.iter().all(|&(i, j)| i < c - 1 && j < r - 1));
+                visited += n;
+                let vertical = ray.direction.x == 0.0 && ray.direction.z == 0.0;
+                if q % 8 == 1 && vertical && max_t == f32::INFINITY {
+                    // Vertical: one cell, up to four on a grid line or corner.
+                    assert!((1..=4).contains(&n), "{n} cells for {ray:?}");
+                }
+                all_cells += ((c - 1) * (r - 1)) as usize;
+                if let (Some((_, g)), Some((_, w))) = (got, want) {
+                    assert_eq!(g.t.to_bits(), w.t.to_bits());
+                }
+                rays += 1;
+                if let Some((_, g)) = got {
+                    let equal = (0..f.triangle_count())
+                        .filter(|&i| {
+                            let h = f.triangle(i).unwrap().cast_ray(&ray, max_t);
+                            h.is_some_and(|h| h.t == g.t)
+                        })
+                        .count();
+                    ties += usize::from(equal > 1);
+                    hits += 1;
+                } else {
+                    misses += 1;
+                }
+            }
+        }
+        assert_eq!(rays, 2 * 800 + 3 * 3000);
+        assert!(ties > 200, "{ties} ties");
+        assert!(hits * 5 > rays, "{hits} hits, {misses} misses");
+        assert!(misses * 4 > rays, "{hits} hits, {misses} misses");
+        // The walk visits a small part of what brute force does.
+        assert!(visited * 20 < all_cells, "{visited} of {all_cells} cells");
+        // Bad rays and limits: nothing.
+        let (h, c, r, cs) = &fields()[2];
+        let f = HeightField::new(h, *c, *r, *cs).unwrap();
+        let down = Ray::new(Vec3::new(3.5, 10.0, 3.5), -Vec3::Y).unwrap();
+        assert!(f.cast_ray(&down, 100.0).is_some());
+        assert_eq!(f.cast_ray(&down, f32::NAN), None);
+        assert_eq!(f.cast_ray(&down, -1.0), None);
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let r = Ray {
+                origin: Vec3::new(bad, 10.0, 3.5),
+                direction: -Vec3::Y,
+            };
+            assert_eq!(f.cast_ray(&r, 100.0), None);
+            let r = Ray {
+                origin: down.origin,
+                direction: Vec3::new(0.0, -1.0, bad),
+            };
+            assert_eq!(f.cast_ray(&r, 100.0), None);
+        }
+        for tiny in [0.0, 1.0e-30, f32::MIN_POSITIVE, 1.0e-45] {
+            let r = Ray {
+                origin: down.origin,
+                direction: -Vec3::Y * tiny,
+            };
+            assert_eq!(f.cast_ray(&r, f32::INFINITY), None);
+            assert_eq!(brute_ray(&f, &r, f32::INFINITY), None);
+        }
+    }
+
+    #[test]
+    fn cast_ray_on_a_vertical_ray_finds_the_cell_below() {
+        // Above the middle of each cell of a tilted plane: exactly one triangle's hit at
+        // the plane's height, on the expected side of the diagonal.
+        let (c, r) = (9u32, 6u32);
+        let h: Vec<f32> = (0..c * r)
+            .map(|k| 0.25 * (k % c) as f32 + 0.5 * (k / c) as f32)
+            .collect();
+        let f = HeightField::new(&h, c, r, 1.0).unwrap();
+        for j in 0..r - 1 {
+            for i in 0..c - 1 {
+                for (dx, dz, k) in [(0.75, 0.25, 0), (0.25, 0.75, 1)] {
+                    let (x, z) = (i as f32 + dx, j as f32 + dz);
+                    let ray = Ray::new(Vec3::new(x, 20.0, z), -Vec3::Y).unwrap();
+                    let mut cells = Vec::new();
+                    let (t, hit) = f.walk_ray(&ray, 100.0, |i, j| cells.push((i, j))).unwrap();
+                    assert_eq!(cells, [(i, j)], "one cell");
+                    assert_eq!(t, 2 * (j * (c - 1) + i) + k);
+                    assert!((hit.point.y - (0.25 * x + 0.5 * z)).abs() < 1e-5);
+                    assert!(hit.normal.y > 0.0);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn candidate_cells_cover_touching_cells() {
+        // A coordinate exactly on sample line i touches cells i − 1 and i, whatever the
+        // rounding of the division; a range inside cell i gives at most i − 1..=i + 1.
+        let mut rng = SplitMix64::new(29);
+        let heights = std::vec![0.0f32; 2 * 4097];
+        let mut checked = 0;
+        for q in 0..300 {
+            let cs = if q < 100 {
+                rng.range(super::super::MIN_SIZE, 0.01)
+            } else {
+                rng.range(0.01, 2.4)
+            };
+            let f = HeightField::new(&heights, 4097, 2, cs).unwrap();
+            let n = f.cells_x();
+            for _ in 0..200 {
+                let i = (rng.next_u64() % u64::from(n + 1)) as u32;
+                let x = f.coord(i);
+                let (a, b) = f.candidate_cells(x, x, n).unwrap();
+                assert!(a <= i.saturating_sub(1) && b >= i.min(n - 1), "{cs} {i}");
+                assert!(b - a <= 3);
+                let mid = 0.5 * (x + f.coord(i + 1));
+                if i < n {
+                    let (a, b) = f.candidate_cells(mid, mid, n).unwrap();
+                    assert!(a + 1 >= i && a <= i && b >= i && b <= i + 1, "{cs} {i}");
+                }
+                checked += 1;
+            }
+        }
+        assert_eq!(checked, 60_000);
+        let f = HeightField::new(&heights, 4097, 2, 1.0).unwrap();
+        assert_eq!(f.candidate_cells(-0.5, -0.1, 4096), None);
+        assert_eq!(f.candidate_cells(4096.5, 5000.0, 4096), None);
+        assert_eq!(f.candidate_cells(f32::NAN, 3.0, 4096), None);
+        assert_eq!(f.candidate_cells(0.0, f32::NAN, 4096), None);
+        assert_eq!(
+            f.candidate_cells(f32::NEG_INFINITY, f32::INFINITY, 4096),
+            Some((0, 4095))
+        );
+        assert_eq!(f.candidate_cells(-1e30, 0.0, 4096), Some((0, 1)));
+        assert_eq!(f.candidate_cells(4096.0, 1e30, 4096), Some((4094, 4095)));
+    }
+
+    #[test]
+    fn new_errors_are_exact_and_in_order() {
+        let e = |h: &[f32], c: u32, r: u32, cs: f32| HeightField::new(h, c, r, cs).map(|_| ());
+        let count = Error::NotPositive(Input::TriangleCount);
+        let ok4 = [0.0f32; 4];
+        // 1. Too few samples, before anything else (empty heights, NaN cell size).
+        for (c, r) in [
+            (0, 0),
+            (1, 1),
+            (1, 5),
+            (5, 1),
+            (0, 5),
+            (5, 0),
+            (1, u32::MAX),
+        ] {
+            assert_eq!(e(&[], c, r, f32::NAN), Err(count), "{c} × {r}");
+            assert_eq!(e(&ok4, c, r, 1.0), Err(count), "{c} × {r}");
+        }
+        // Too many cells: exact integer count, no overflow.
+        let many = Error::OutOfRange(Input::TriangleCount);
+        let max = MAX_HEIGHT_FIELD_CELLS as u32;
+        for (c, r) in [
+            (u32::MAX, u32::MAX),
+            (u32::MAX, 2),
+            (2, u32::MAX),
+            (max + 2, 2),
+            (1026, 513),
+            (1 << 16, 1 << 16),
+        ] {
+            assert_eq!(e(&[], c, r, f32::NAN), Err(many), "{c} × {r}");
+        }
+        // 2. Too few heights: columns · rows, before heights and cell size.
+        assert_eq!(
+            e(&[], max + 1, 2, f32::NAN),
+            Err(Error::BufferTooSmall(2 * max + 2))
+        );
+        assert_eq!(
+            e(&[], 1025, 513, 1.0),
+            Err(Error::BufferTooSmall(1025 * 513))
+        );
+        assert_eq!(e(&[f32::NAN; 5], 3, 2, 0.0), Err(Error::BufferTooSmall(6)));
+        assert_eq!(e(&[], 2, 2, 1.0), Err(Error::BufferTooSmall(4)));
+        // 3. Each height in use, in order; unused entries are not read.
+        let point_nf = Error::NonFinite(Input::Point);
+        let point_far = Error::OutOfRange(Input::Point);
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(e(&[0.0, 0.0, 0.0, bad], 2, 2, f32::NAN), Err(point_nf));
+            assert_eq!(e(&[0.0, 1e5, 0.0, bad], 2, 2, 1.0), Err(point_far));
+            assert_eq!(e(&[bad, 1e5, 0.0, 0.0], 2, 2, 1.0), Err(point_nf));
+            assert!(e(&[0.0, 0.0, 0.0, 0.0, bad], 2, 2, 1.0).is_ok());
+        }
+        for far in [MAX_COORDINATE * 1.0001, -MAX_COORDINATE * 1.0001, 1e30] {
+            assert_eq!(e(&[0.0, 0.0, far, 0.0], 2, 2, f32::NAN), Err(point_far));
+        }
+        let edge = [MAX_COORDINATE, -MAX_COORDINATE, 0.0, 0.0];
+        assert!(e(&edge, 2, 2, 1.0).is_ok());
+        // 4. Cell size.
+        for (cs, want) in [
+            (f32::NAN, Error::NonFinite(Input::Distance)),
+            (f32::INFINITY, Error::NonFinite(Input::Distance)),
+            (f32::NEG_INFINITY, Error::NonFinite(Input::Distance)),
+            (0.0, Error::NotPositive(Input::Distance)),
+            (-0.0, Error::NotPositive(Input::Distance)),
+            (-1.0, Error::NotPositive(Input::Distance)),
+            (
+                super::super::MIN_SIZE * 0.99,
+                Error::OutOfRange(Input::Distance),
+            ),
+            (
+                super::super::MAX_SIZE * 1.01,
+                Error::OutOfRange(Input::Distance),
+            ),
+            (1e-30, Error::OutOfRange(Input::Distance)),
+        ] {
+            assert_eq!(e(&ok4, 2, 2, cs), Err(want), "cell {cs}");
+        }
+        assert!(e(&ok4, 2, 2, super::super::MIN_SIZE).is_ok());
+        assert!(e(&ok4, 2, 2, super::super::MAX_SIZE).is_ok());
+        // 5. Extent: 11 cells of 1 km is too wide, 10 exactly fits (either axis).
+        let far = Error::OutOfRange(Input::Distance);
+        let z = std::vec![0.0f32; 24];
+        assert_eq!(e(&z, 12, 2, 1000.0), Err(far));
+        assert_eq!(e(&z, 2, 12, 1000.0), Err(far));
+        assert!(e(&z, 11, 2, 1000.0).is_ok());
+        assert!(e(&z, 2, 11, 1000.0).is_ok());
+        let f = HeightField::new(&z, 11, 2, 1000.0).unwrap();
+        assert_eq!(f.aabb().max.x, MAX_COORDINATE);
+        // The largest field: 2²⁰ triangles in one strip, last index 2²⁰ − 1.
+        let strip = std::vec![0.5f32; 2 * max as usize + 2];
+        let f = HeightField::new(&strip, max + 1, 2, 0.01).unwrap();
+        assert_eq!(f.triangle_count(), 1 << 20);
+        assert!(f.triangle((1 << 20) - 1).is_some());
+        assert_eq!(f.triangle(1 << 20), None);
+        let mut got = Vec::new();
+        // From the last cell's left edge: the last cell and the one touching it there.
+        let q = Aabb::new(Vec3::new(f.coord(max - 1), 0.0, 0.0), Vec3::splat(1.0e4));
+        f.query_aabb(&q, |t| got.push(t));
+        assert_eq!(got, brute_query(&f, &q));
+        let last = (1 << 20) - 1;
+        assert_eq!(got, [last - 3, last - 2, last - 1, last]);
+        let ray = Ray::new(Vec3::new(0.0, 1.0, 0.003), Vec3::new(1.0, -1.0e-4, 0.0)).unwrap();
+        assert_eq!(
+            f.cast_ray(&ray, f32::INFINITY),
+            brute_ray(&f, &ray, f32::INFINITY)
+        );
+        let (t, hit) = f.cast_ray(&ray, f32::INFINITY).unwrap();
+        assert!((hit.point.x - 5000.0).abs() < 0.1, "{hit:?}");
+        assert_eq!(t / 2, (hit.point.x / 0.01) as u32, "{hit:?}");
+    }
+
+    #[test]
+    fn random_garbage_never_panics() {
+        let mut rng = SplitMix64::new(23);
+        let specials = [
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -0.0,
+            1.0e30,
+            -1.0e30,
+            MAX_COORDINATE,
+            1.0e-30,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+        ];
+        let mut pick = |rng: &mut SplitMix64, lo: f32, hi: f32| {
+            if rng.next_u64().is_multiple_of(8) {
+                specials[(rng.next_u64() % specials.len() as u64) as usize]
+            } else {
+                rng.range(lo, hi)
+            }
+        };
+        let (mut built, mut compared) = (0, 0);
+        for _ in 0..20_000 {
+            let c = (rng.next_u64() % 6) as u32;
+            let r = (rng.next_u64() % 6) as u32;
+            let n = (rng.next_u64() % 40) as usize;
+            let h: Vec<f32> = (0..n)
+                .map(|_| {
+                    if rng.next_u64().is_multiple_of(60) {
+                        pick(&mut rng, -3.0, 3.0)
+                    } else {
+                        rng.range(-3.0, 3.0)
+                    }
+                })
+                .collect();
+            let cs = if rng.next_u64().is_multiple_of(10) {
+                pick(&mut rng, -1.0, 2.0)
+            } else {
+                rng.range(0.01, 2.0)
+            };
+            let Ok(f) = HeightField::new(&h, c, r, cs) else {
+                continue;
+            };
+            built += 1;
+            let v = |rng: &mut SplitMix64, p: &mut dyn FnMut(&mut SplitMix64) -> f32| {
+                let _ = rng;
+                Vec3::new(p(rng), p(rng), p(rng))
+            };
+            let mut coord = |rng: &mut SplitMix64| pick(rng, -4.0, 8.0);
+            let (a, b) = (v(&mut rng, &mut coord), v(&mut rng, &mut coord));
+            let q = Aabb::new(a.min(b), a.max(b));
+            let mut got = Vec::new();
+            f.query_aabb(&q, |t| got.push(t));
+            assert_eq!(got, brute_query(&f, &q), "{q:?}");
+            let q = Aabb::new(a, b); // maybe inverted
+            let mut got = Vec::new();
+            f.query_aabb(&q, |t| got.push(t));
+            assert_eq!(got, brute_query(&f, &q), "{q:?}");
+            let origin = v(&mut rng, &mut coord);
+            let mut dir = |rng: &mut SplitMix64| pick(rng, -1.0, 1.0);
+            let direction = v(&mut rng, &mut dir);
+            let max_t = pick(&mut rng, 0.0, 20.0);
+            let ray = Ray { origin, direction };
+            let got = f.cast_ray(&ray, max_t);
+            // Sane rays (a position within range, a direction of unit length) must
+            // match brute force; anything else must merely not panic.
+            if let Ok(unit) = Ray::new(origin, direction) {
+                let got = f.cast_ray(&unit, max_t);
+                assert_eq!(got, brute_ray(&f, &unit, max_t), "{unit:?} {max_t}");
+                compared += 1;
+            }
+            let _ = got;
+            for t in [0, 1, f.triangle_count() - 1] {
+                assert!(f.triangle(t).is_some());
+            }
+            assert_eq!(f.triangle(f.triangle_count()), None);
+            assert_eq!(f.triangle(u32::MAX), None);
+        }
+        assert!(built > 3000, "{built} built");
+        assert!(compared > 1000, "{compared} compared");
     }
 }
