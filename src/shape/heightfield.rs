@@ -306,7 +306,7 @@ impl<'a> HeightField<'a> {
         }
         let (o, d) = (ray.origin, ray.direction);
         let d_max = d.abs().max_elem();
-        if !(d_max >= TINY_DIRECTION) {
+        if d_max < TINY_DIRECTION {
             return None;
         }
         let size = scalar::max(
@@ -366,11 +366,7 @@ impl<'a> HeightField<'a> {
             (o.z, d.z, nz, o.x, d.x, nx)
         };
         let (xa, xb) = (o_maj + d_maj * s0, o_maj + d_maj * s1);
-        let Some((c0, c1)) =
-            self.ray_cells(scalar::min(xa, xb) - m, scalar::max(xa, xb) + m, n_maj)
-        else {
-            return None;
-        };
+        let (c0, c1) = self.ray_cells(scalar::min(xa, xb) - m, scalar::max(xa, xb) + m, n_maj)?;
         for step in 0..=(c1 - c0) {
             let c = if d_maj > 0.0 { c0 + step } else { c1 - step };
             // The parameters where the ray is over column c, grown by the margin.
@@ -382,8 +378,8 @@ impl<'a> HeightField<'a> {
             if near > limit + slack {
                 break; // this column and every later one start past the nearest hit
             }
-            if !(near <= far) {
-                continue;
+            if near > far {
+                continue; // (no NaN: finite over nonzero, clamped to the finite [s0, s1])
             }
             let (za, zb) = (o_min + d_min * near, o_min + d_min * far);
             let Some((r0, r1)) =
@@ -516,7 +512,7 @@ impl<'a> HeightField<'a> {
     #[inline]
     fn floor_cell(&self, v: f32, n: u32) -> u32 {
         let q = v / self.cell_size;
-        if !(q > 0.0) {
+        if q.is_nan() || q <= 0.0 {
             0
         } else if q >= n as f32 {
             n - 1
@@ -888,7 +884,7 @@ mod tests {
                 let mut ray = random_ray(&mut rng, &f, q);
                 // Some directions not of unit length (the public fields allow it).
                 if q % 11 == 0 {
-                    ray.direction = ray.direction * [0.01, 100.0][q % 2];
+                    ray.direction *= [0.01, 100.0][q % 2];
                 }
                 let max_t = [f32::INFINITY, 1.0, 5.0, 30.0, 0.3, 0.0][q % 6];
                 let mut cells = Vec::new();
@@ -1140,79 +1136,78 @@ mod tests {
         assert_eq!(t / 2, (hit.point.x / 0.01) as u32, "{hit:?}");
     }
 
+    /// Values that break careless code.
+    const SPECIALS: [f32; 10] = [
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -0.0,
+        1.0e30,
+        -1.0e30,
+        MAX_COORDINATE,
+        1.0e-30,
+        f32::MAX,
+        f32::MIN_POSITIVE,
+    ];
+
+    /// Uniform in `[lo, hi)`, or one time in `one_in` a special value.
+    fn pick(rng: &mut SplitMix64, lo: f32, hi: f32, one_in: u64) -> f32 {
+        if rng.next_u64().is_multiple_of(one_in) {
+            SPECIALS[(rng.next_u64() % SPECIALS.len() as u64) as usize]
+        } else {
+            rng.range(lo, hi)
+        }
+    }
+
+    fn pick_vec(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(
+            pick(rng, lo, hi, 8),
+            pick(rng, lo, hi, 8),
+            pick(rng, lo, hi, 8),
+        )
+    }
+
     #[test]
     fn random_garbage_never_panics() {
         let mut rng = SplitMix64::new(23);
-        let specials = [
-            f32::NAN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            -0.0,
-            1.0e30,
-            -1.0e30,
-            MAX_COORDINATE,
-            1.0e-30,
-            f32::MAX,
-            f32::MIN_POSITIVE,
-        ];
-        let mut pick = |rng: &mut SplitMix64, lo: f32, hi: f32| {
-            if rng.next_u64().is_multiple_of(8) {
-                specials[(rng.next_u64() % specials.len() as u64) as usize]
-            } else {
-                rng.range(lo, hi)
-            }
-        };
-        let (mut built, mut compared) = (0, 0);
+        let (mut built, mut unit_rays, mut other_rays) = (0, 0, 0);
         for _ in 0..20_000 {
             let c = (rng.next_u64() % 6) as u32;
             let r = (rng.next_u64() % 6) as u32;
             let n = (rng.next_u64() % 40) as usize;
-            let h: Vec<f32> = (0..n)
-                .map(|_| {
-                    if rng.next_u64().is_multiple_of(60) {
-                        pick(&mut rng, -3.0, 3.0)
-                    } else {
-                        rng.range(-3.0, 3.0)
-                    }
-                })
-                .collect();
-            let cs = if rng.next_u64().is_multiple_of(10) {
-                pick(&mut rng, -1.0, 2.0)
-            } else {
-                rng.range(0.01, 2.0)
-            };
+            let h: Vec<f32> = (0..n).map(|_| pick(&mut rng, -3.0, 3.0, 60)).collect();
+            let cs = pick(&mut rng, 0.01, 2.0, 10);
             let Ok(f) = HeightField::new(&h, c, r, cs) else {
                 continue;
             };
             built += 1;
-            let v = |rng: &mut SplitMix64, p: &mut dyn FnMut(&mut SplitMix64) -> f32| {
-                let _ = rng;
-                Vec3::new(p(rng), p(rng), p(rng))
+            // Boxes with NaN, infinite and huge corners, in order or inverted: the same
+            // answer as brute force.
+            let (a, b) = (pick_vec(&mut rng, -4.0, 8.0), pick_vec(&mut rng, -4.0, 8.0));
+            for q in [Aabb::new(a.min(b), a.max(b)), Aabb::new(a, b)] {
+                let mut got = Vec::new();
+                f.query_aabb(&q, |t| got.push(t));
+                assert_eq!(got, brute_query(&f, &q), "{q:?}");
+            }
+            // Rays: non-finite ones miss; finite ones, unit or not, huge or not, give the
+            // brute-force answer.
+            let ray = Ray {
+                origin: pick_vec(&mut rng, -4.0, 8.0),
+                direction: pick_vec(&mut rng, -1.0, 1.0),
             };
-            let mut coord = |rng: &mut SplitMix64| pick(rng, -4.0, 8.0);
-            let (a, b) = (v(&mut rng, &mut coord), v(&mut rng, &mut coord));
-            let q = Aabb::new(a.min(b), a.max(b));
-            let mut got = Vec::new();
-            f.query_aabb(&q, |t| got.push(t));
-            assert_eq!(got, brute_query(&f, &q), "{q:?}");
-            let q = Aabb::new(a, b); // maybe inverted
-            let mut got = Vec::new();
-            f.query_aabb(&q, |t| got.push(t));
-            assert_eq!(got, brute_query(&f, &q), "{q:?}");
-            let origin = v(&mut rng, &mut coord);
-            let mut dir = |rng: &mut SplitMix64| pick(rng, -1.0, 1.0);
-            let direction = v(&mut rng, &mut dir);
-            let max_t = pick(&mut rng, 0.0, 20.0);
-            let ray = Ray { origin, direction };
+            let max_t = pick(&mut rng, 0.0, 20.0, 8);
             let got = f.cast_ray(&ray, max_t);
-            // Sane rays (a position within range, a direction of unit length) must
-            // match brute force; anything else must merely not panic.
-            if let Ok(unit) = Ray::new(origin, direction) {
+            if !(ray.origin.is_finite() && ray.direction.is_finite()) {
+                assert_eq!(got, None);
+            } else {
+                assert_eq!(got, brute_ray(&f, &ray, max_t), "{ray:?} {max_t}");
+                other_rays += 1;
+            }
+            if let Ok(unit) = Ray::new(ray.origin, ray.direction) {
                 let got = f.cast_ray(&unit, max_t);
                 assert_eq!(got, brute_ray(&f, &unit, max_t), "{unit:?} {max_t}");
-                compared += 1;
+                unit_rays += 1;
             }
-            let _ = got;
             for t in [0, 1, f.triangle_count() - 1] {
                 assert!(f.triangle(t).is_some());
             }
@@ -1220,6 +1215,7 @@ mod tests {
             assert_eq!(f.triangle(u32::MAX), None);
         }
         assert!(built > 3000, "{built} built");
-        assert!(compared > 1000, "{compared} compared");
+        assert!(unit_rays > 1000, "{unit_rays} unit rays");
+        assert!(other_rays > 1000, "{other_rays} finite rays");
     }
 }
