@@ -9,6 +9,7 @@
 mod capsule;
 mod compound;
 mod cuboid;
+mod heightfield;
 mod hull;
 mod mesh;
 mod plane;
@@ -18,6 +19,7 @@ mod triangle;
 pub use capsule::Capsule;
 pub use compound::{Compound, CompoundPart, MAX_COMPOUND_PARTS};
 pub use cuboid::Cuboid;
+pub use heightfield::{HeightField, MAX_HEIGHT_FIELD_CELLS};
 pub(crate) use hull::EDGE_TILT_SIN;
 pub use hull::{
     ConvexHull, MAX_HULL_EDGES, MAX_HULL_FACES, MAX_HULL_INPUT_POINTS, MAX_HULL_VERTICES,
