@@ -170,7 +170,7 @@ pub enum Error {
     /// A query that takes one convex shape ([`crate::collide::contact`],
     /// [`crate::collide::distance`], [`crate::collide::penetration`],
     /// [`crate::collide::separation`], [`crate::collide::time_of_impact`] and their kin)
-    /// was given a triangle mesh or a compound: query their parts instead.
+    /// was given a triangle mesh, a height field or a compound: query their parts instead.
     NotConvex,
     /// A snapshot is truncated, corrupt or from an incompatible build:
     /// [`crate::World::restore`] and [`crate::World::restore_with_hulls`]; the
@@ -200,8 +200,9 @@ pub enum SnapshotError {
     /// A body's hull shape was not found among the hulls given to restore
     /// (plain [`crate::World::restore`] looks among the hulls its bodies use now).
     MissingHull,
-    /// A body's mesh or compound was not found among the shapes the world's bodies use
-    /// now (restore a world that holds the same level geometry and compounds).
+    /// A body's mesh, height field or compound was not found among the shapes the world's
+    /// bodies use now (restore into a world that holds the same level geometry and
+    /// compounds).
     MissingShape,
 }
 
@@ -219,7 +220,7 @@ impl core::fmt::Display for Error {
             Error::StaleHandle => write!(f, "stale body handle"),
             Error::PoolFull(p) => write!(f, "{p:?} pool is full"),
             Error::BufferTooSmall(n) => write!(f, "buffer too small, {n} elements needed"),
-            Error::NotConvex => write!(f, "a mesh or compound where one convex shape is needed"),
+            Error::NotConvex => write!(f, "a shape with parts where one convex shape is needed"),
             Error::Snapshot(s) => write!(f, "snapshot refused: {s:?}"),
         }
     }

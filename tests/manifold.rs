@@ -367,7 +367,9 @@ fn core_vertices(s: &Shape) -> Vec<Vec3> {
         Shape::Cuboid(_) => (0..8).map(|i| s.core_vertex(i)).collect(),
         Shape::Hull(h) => h.vertices().to_vec(),
         Shape::Triangle(t) => t.vertices.to_vec(),
-        Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::Compound(_) => vec![],
+        Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => {
+            vec![]
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! plane, compounds rest on their parts, fast bodies do not tunnel through a mesh, and
 //! queries and snapshots reach into meshes and compounds.
 
-use carom::shape::{BvhNode, Compound, CompoundPart, TriangleMesh};
+use carom::shape::{BvhNode, Compound, CompoundPart, HeightField, TriangleMesh};
 use carom::{BodyDesc, Iso, Material, QueryFilter, Ray, Shape, Vec3, World};
 
 /// A flat grid of `n × n` square cells of `cell` metres at height 0, centred on the
@@ -355,4 +355,113 @@ fn snapshots_carry_mesh_and_compound_worlds() {
         carom::collide::separation(&ball, &far, &Shape::Compound(&c), &Iso::IDENTITY).map(|_| ()),
         Err(carom::Error::NotConvex)
     );
+}
+
+/// A flat height field of `n × n` cells of `cell` metres, centred on the origin by its
+/// body's position.
+fn flat_field(n: u32, cell: f32) -> (Vec<f32>, Iso) {
+    let heights = vec![0.0; ((n + 1) * (n + 1)) as usize];
+    let half = n as f32 * cell * 0.5;
+    (heights, Iso::from_position(Vec3::new(-half, 0.0, -half)))
+}
+
+/// On a flat height field a box rests at the same height as on a box ground and a ball
+/// rolls across its cells at the same speed.
+#[test]
+fn bodies_on_a_flat_height_field_behave_as_on_one_plane() {
+    let (h, at) = flat_field(20, 0.5);
+    let field = HeightField::new(&h, 21, 21, 0.5).unwrap();
+    let ground = || BodyDesc::fixed(Shape::HeightField(&field)).position(at.position);
+    let box_ground = || {
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0))
+    };
+    let drop_box = |g: BodyDesc<'_>| {
+        let mut w: Small<'_> = World::new();
+        w.add(g).unwrap();
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::cuboid(Vec3::splat(0.5)).unwrap())
+                    .position(Vec3::new(0.13, 0.7, -0.21))
+                    .rotation(carom::Quat::from_axis_angle(Vec3::Y, 0.3)),
+            )
+            .unwrap();
+        track(&mut w, h, 180)
+    };
+    let (on_field, on_box) = (drop_box(ground()), drop_box(box_ground()));
+    let (f, b) = (on_field.last().unwrap().0, on_box.last().unwrap().0);
+    assert!((f - b).length() < 2e-3, "{f:?} vs {b:?}");
+    let roll = |g: BodyDesc<'_>| {
+        let mut w: Small<'_> = World::new();
+        w.add(g).unwrap();
+        let h = w
+            .add(
+                BodyDesc::dynamic(Shape::sphere(0.25).unwrap())
+                    .position(Vec3::new(-4.0, 0.25, 0.1))
+                    .velocity(Vec3::new(2.0, 0.0, 0.0))
+                    .angular_velocity(Vec3::new(0.0, 0.0, -8.0)),
+            )
+            .unwrap();
+        track(&mut w, h, 120)
+    };
+    let (on_field, on_box) = (roll(ground()), roll(box_ground()));
+    let (vf, vb) = (on_field.last().unwrap().1, on_box.last().unwrap().1);
+    assert!((vf - vb).length() < 0.02, "{vf:?} vs {vb:?}");
+    for (p, v) in &on_field {
+        assert!(v.y.abs() < 0.05 && (p.y - 0.25).abs() < 5e-3, "{p:?} {v:?}");
+    }
+}
+
+/// A ball on a height field sloping at θ (heights `x tan θ`), without rolling
+/// resistance, rolls down with a = 5/7 g sin θ (a solid ball rolling without slipping).
+#[test]
+fn a_ball_rolls_down_a_height_field_slope_at_five_sevenths_g_sin_theta() {
+    let theta = 0.15f32;
+    let (n, cell) = (40u32, 0.5f32);
+    let mut heights = Vec::new();
+    for _j in 0..=n {
+        for i in 0..=n {
+            heights.push((n - i) as f32 * cell * theta.tan());
+        }
+    }
+    let field = HeightField::new(&heights, n + 1, n + 1, cell).unwrap();
+    // No rolling resistance on either side (the world combines the two materials).
+    let smooth = Material {
+        rolling_resistance: 0.0,
+        twist_friction: 0.0,
+        ..Material::DEFAULT
+    };
+    let mut w: Small<'_> = World::new();
+    w.add(
+        BodyDesc::fixed(Shape::HeightField(&field))
+            .position(Vec3::new(0.0, 0.0, -10.0))
+            .material(smooth),
+    )
+    .unwrap();
+    let r = 0.3;
+    // Resting on the slope near its top, x = 3: the centre r along the slope's normal.
+    let x0 = 3.0f32;
+    let surface = (20.0 - x0) * theta.tan();
+    let normal = Vec3::new(theta.sin(), theta.cos(), 0.0);
+    let h = w
+        .add(
+            BodyDesc::dynamic(Shape::sphere(r).unwrap())
+                .position(Vec3::new(x0, surface, 0.3) + normal * r)
+                .material(smooth),
+        )
+        .unwrap();
+    let steps = 90;
+    let path = track(&mut w, h, steps);
+    let t = steps as f32 / 60.0;
+    let speed = path.last().unwrap().1.length();
+    let want = 5.0 / 7.0 * 9.81 * theta.sin() * t;
+    assert!(
+        (speed - want).abs() < 0.02 * want,
+        "speed {speed} vs {want}"
+    );
+    // It stays on the slope: no hop off a seam.
+    for (p, _) in &path {
+        let height_over = p.y - (20.0 - p.x) * theta.tan();
+        assert!((height_over * theta.cos() - r).abs() < 5e-3, "{p:?}");
+    }
 }

@@ -517,7 +517,9 @@ pub(crate) fn half_space_contact(
     };
     match b {
         // Half-spaces never touch; meshes and compounds never reach the narrow phase.
-        Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::Compound(_) => return None,
+        Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => {
+            return None
+        }
         Shape::Sphere(_) => add(Vec3::ZERO, 0),
         Shape::Capsule(c) => {
             let (s0, s1) = c.segment();

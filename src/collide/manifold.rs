@@ -417,7 +417,7 @@ fn order_rank(s: &Shape) -> u8 {
         Shape::Capsule(_) => 2,
         Shape::Cuboid(_) | Shape::Hull(_) | Shape::Triangle(_) => 3,
         // Never in the narrow phase (its doors refuse them); ranked last to stay total.
-        Shape::Mesh(_) | Shape::Compound(_) => 4,
+        Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => 4,
     }
 }
 
@@ -533,6 +533,7 @@ fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
         Shape::Capsule(_) => 4,
         Shape::HalfSpace(_) => 5,
         Shape::Mesh(_) => 6,
+        Shape::HeightField(_) => 8,
         Shape::Compound(_) => 7,
     };
     let vec = |u: Vec3, v: Vec3| {

@@ -402,7 +402,7 @@ pub(crate) fn check_shape(shape: &Shape<'_>) -> Result<(), Error> {
         // Hulls can only come from `ConvexHull::new`, which validated them.
         Shape::Hull(_) => Ok(()),
         // Meshes and compounds have private fields: their constructors checked them.
-        Shape::Mesh(_) | Shape::Compound(_) => Ok(()),
+        Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => Ok(()),
     }
 }
 

@@ -37,7 +37,7 @@ use crate::dynamics::events::StepReport;
 use crate::dynamics::pool::Pool;
 use crate::math::{scalar, Aabb, Iso, Vec3};
 use crate::shape::Shape;
-use crate::shape::TriangleMesh;
+use crate::shape::{HeightField, Triangle, TriangleMesh};
 
 /// Most part pairs one body pair may have contacts for at a time (a box on a mesh whose
 /// triangles are much smaller than it reaches this; the rest are dropped and counted).
@@ -59,6 +59,7 @@ pub(crate) struct PartPair<'a> {
 pub(crate) fn part_count(s: &Shape<'_>) -> u32 {
     match s {
         Shape::Mesh(m) => m.triangle_count(),
+        Shape::HeightField(f) => f.triangle_count(),
         Shape::Compound(c) => c.part_count(),
         _ => 1,
     }
@@ -68,6 +69,7 @@ pub(crate) fn part_count(s: &Shape<'_>) -> u32 {
 fn part<'a>(s: &Shape<'a>, i: u32) -> Option<(Shape<'a>, Option<Iso>)> {
     match s {
         Shape::Mesh(m) => m.triangle(i).map(|t| (Shape::Triangle(t), None)),
+        Shape::HeightField(f) => f.triangle(i).map(|t| (Shape::Triangle(t), None)),
         Shape::Compound(c) => c.part(i).map(|(p, _)| (p.shape, Some(p.pose))),
         _ => (i == 0).then_some((*s, None)),
     }
@@ -94,10 +96,9 @@ pub(crate) fn part_pair<'a>(a: &Shape<'a>, b: &Shape<'a>, sub: u32) -> Option<Pa
 /// Part `i`'s bounds in its shape's frame (a convex shape: its own).
 fn part_bounds(s: &Shape<'_>, i: u32) -> Aabb {
     match s {
-        Shape::Mesh(m) => m.triangle(i).map_or(Aabb::default(), |t| {
-            let [a, b, c] = t.vertices;
-            Aabb::new(a.min(b).min(c), a.max(b).max(c))
-        }),
+        Shape::Mesh(_) | Shape::HeightField(_) => {
+            part(s, i).map_or(Aabb::default(), |(t, _)| t.local_aabb())
+        }
         Shape::Compound(c) => c.part(i).map_or(Aabb::default(), |(_, b)| b),
         _ => s.local_aabb(),
     }
@@ -110,6 +111,7 @@ fn query_parts(s: &Shape<'_>, region: &Aabb, f: impl FnMut(u32)) {
     let mut f = f;
     match s {
         Shape::Mesh(m) => m.query_aabb(region, f),
+        Shape::HeightField(h) => h.query_aabb(region, f),
         Shape::Compound(c) => c.query_aabb(region, f),
         _ => f(0),
     }
@@ -381,10 +383,10 @@ const ACTIVE_EDGE_SIN: f32 = 0.035;
 /// [`ACTIVE_EDGE_SIN`], keep the normals the narrow phase found. `mesh_is_a` says which
 /// side of the manifold the mesh is (the normal points from A to B). Neighbours are
 /// found when needed, by the hierarchy, among the triangles that share the edge's two
-/// vertices (by index or by position).
+/// end points.
 pub(crate) fn correct_internal_edges(
     m: &mut Manifold,
-    mesh: &TriangleMesh<'_>,
+    mesh: &Soup<'_, '_>,
     tri: u32,
     mesh_pose: &Iso,
     mesh_is_a: bool,
@@ -434,41 +436,33 @@ pub(crate) fn correct_internal_edges(
 
 /// True when edge `edge` (0: v0–v1, 1: v1–v2, 2: v2–v0) of triangle `tri` has no
 /// neighbour, or its neighbour turns down from the face (normal `f`, the side in use) by
-/// more than [`ACTIVE_EDGE_SIN`] (module docs of [`correct_internal_edges`]).
-fn edge_is_active(mesh: &TriangleMesh<'_>, tri: u32, edge: usize, f: Vec3) -> bool {
-    let Some(&idx) = mesh.indices().get(tri as usize) else {
+/// more than [`ACTIVE_EDGE_SIN`] (see [`correct_internal_edges`]). A neighbour is another
+/// triangle with both of the edge's end points, the same bits.
+fn edge_is_active(soup: &Soup<'_, '_>, tri: u32, edge: usize, f: Vec3) -> bool {
+    let Some(t) = soup.triangle(tri) else {
         return true;
     };
-    let (iu, iv) = match edge {
-        0 => (idx[0], idx[1]),
-        1 => (idx[1], idx[2]),
-        _ => (idx[2], idx[0]),
+    let [p0, p1, p2] = t.vertices;
+    let (u, v) = match edge {
+        0 => (p0, p1),
+        1 => (p1, p2),
+        _ => (p2, p0),
     };
-    let vertex = |i: u32| mesh.vertices().get(i as usize).copied();
-    let (Some(u), Some(v)) = (vertex(iu), vertex(iv)) else {
-        return true;
-    };
-    let same = |i: u32, j: u32| i == j || vertex(i).is_some_and(|p| Some(p) == vertex(j));
     let mut active = true;
     let mut found = false;
-    mesh.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
+    soup.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
         if other == tri || found {
             return;
         }
-        let Some(&o) = mesh.indices().get(other as usize) else {
+        let Some(o) = soup.triangle(other) else {
             return;
         };
-        let has = |x: u32| o.iter().any(|&y| same(x, y));
-        if !(has(iu) && has(iv)) {
+        if !(o.vertices.contains(&u) && o.vertices.contains(&v)) {
             return;
         }
         // The neighbour's third vertex: below the face's plane by more than the
         // threshold (relative to its distance) means a ridge.
-        let Some(w) = o
-            .iter()
-            .find(|&&y| !same(iu, y) && !same(iv, y))
-            .and_then(|&y| vertex(y))
-        else {
+        let Some(&w) = o.vertices.iter().find(|&&x| x != u && x != v) else {
             return;
         };
         found = true;
@@ -478,8 +472,42 @@ fn edge_is_active(mesh: &TriangleMesh<'_>, tri: u32, edge: usize, f: Vec3) -> bo
     active
 }
 
+/// The triangles of a mesh or a height field, for the internal-edge rule.
+#[derive(Clone, Copy)]
+pub(crate) enum Soup<'s, 'a> {
+    /// A triangle mesh.
+    Mesh(&'s TriangleMesh<'a>),
+    /// A height field's cells.
+    Field(&'s HeightField<'a>),
+}
+
+impl Soup<'_, '_> {
+    /// The soup of a shape made of triangles.
+    fn of<'s, 'a>(shape: &'s Shape<'a>) -> Option<Soup<'s, 'a>> {
+        match shape {
+            Shape::Mesh(m) => Some(Soup::Mesh(m)),
+            Shape::HeightField(f) => Some(Soup::Field(f)),
+            _ => None,
+        }
+    }
+
+    fn triangle(&self, i: u32) -> Option<Triangle> {
+        match self {
+            Soup::Mesh(m) => m.triangle(i),
+            Soup::Field(f) => f.triangle(i),
+        }
+    }
+
+    fn query_aabb(&self, aabb: &Aabb, f: impl FnMut(u32)) {
+        match self {
+            Soup::Mesh(m) => m.query_aabb(aabb, f),
+            Soup::Field(h) => h.query_aabb(aabb, f),
+        }
+    }
+}
+
 /// [`correct_internal_edges`] for a part contact's manifold when one of the bodies is a
-/// mesh (`sub` the part contact's key).
+/// mesh or height field (`sub` the part contact's key).
 pub(crate) fn correct_mesh_contact(
     m: &mut Manifold,
     a: &Shape<'_>,
@@ -492,10 +520,10 @@ pub(crate) fn correct_mesh_contact(
         return;
     };
     let nb = part_count(b).max(1);
-    if let Shape::Mesh(mesh) = a {
-        correct_internal_edges(m, mesh, k / nb, pose_a, true);
-    } else if let Shape::Mesh(mesh) = b {
-        correct_internal_edges(m, mesh, k % nb, pose_b, false);
+    if let Some(soup) = Soup::of(a) {
+        correct_internal_edges(m, &soup, k / nb, pose_a, true);
+    } else if let Some(soup) = Soup::of(b) {
+        correct_internal_edges(m, &soup, k % nb, pose_b, false);
     }
 }
 

@@ -39,7 +39,8 @@ use crate::config::{CombineRule, WorldConfig};
 use crate::error::{Error, SnapshotError};
 use crate::math::{Aabb, Iso, Quat, Vec3};
 use crate::shape::{
-    Capsule, Compound, ConvexHull, Cuboid, HalfSpace, Shape, Sphere, Triangle, TriangleMesh,
+    Capsule, Compound, ConvexHull, Cuboid, HalfSpace, HeightField, Shape, Sphere, Triangle,
+    TriangleMesh,
 };
 use crate::World;
 
@@ -230,6 +231,18 @@ pub(crate) fn mesh_fingerprint(m: &TriangleMesh<'_>) -> u64 {
     f.0
 }
 
+/// Fingerprint of a height field: FNV-1a 64 over its grid size, cell size and heights.
+pub(crate) fn field_fingerprint(f: &HeightField<'_>) -> u64 {
+    let mut h = Fnv::new();
+    h.u32(f.columns());
+    h.u32(f.rows());
+    h.f32(f.cell_size());
+    for &y in f.heights() {
+        h.f32(y);
+    }
+    h.0
+}
+
 /// Fingerprint of a compound: FNV-1a 64 over each part's pose and shape as a snapshot
 /// stores them (a hull part by its fingerprint).
 pub(crate) fn compound_fingerprint(c: &Compound<'_>) -> u64 {
@@ -247,6 +260,7 @@ pub(crate) fn shape_reference(shape: &Shape<'_>) -> Option<(u8, u64)> {
     match shape {
         Shape::Hull(h) => Some((TAG_HULL, hull_fingerprint(h))),
         Shape::Mesh(m) => Some((TAG_MESH, mesh_fingerprint(m))),
+        Shape::HeightField(f) => Some((TAG_FIELD, field_fingerprint(f))),
         Shape::Compound(c) => Some((TAG_COMPOUND, compound_fingerprint(c))),
         _ => None,
     }
@@ -256,6 +270,7 @@ pub(crate) fn shape_reference(shape: &Shape<'_>) -> Option<(u8, u64)> {
 const TAG_HULL: u8 = 3;
 const TAG_MESH: u8 = 6;
 const TAG_COMPOUND: u8 = 7;
+const TAG_FIELD: u8 = 8;
 
 fn put_shape(s: &mut impl Sink, shape: &Shape<'_>) {
     match shape {
@@ -290,6 +305,10 @@ fn put_shape(s: &mut impl Sink, shape: &Shape<'_>) {
             s.u8(TAG_MESH);
             s.u64(mesh_fingerprint(m));
         }
+        Shape::HeightField(f) => {
+            s.u8(TAG_FIELD);
+            s.u64(field_fingerprint(f));
+        }
         Shape::Compound(c) => {
             s.u8(TAG_COMPOUND);
             s.u64(compound_fingerprint(c));
@@ -307,7 +326,7 @@ fn get_shape<'a>(r: &mut Reader<'_>, refs: &ShapeLookup<'_, 'a>) -> R<Shape<'a>>
         }
         2 => Shape::Cuboid(Cuboid::new(r.vec3()?).map_err(bad)?),
         TAG_HULL => refs(TAG_HULL, r.u64()?).ok_or(SnapshotError::MissingHull)?,
-        tag @ (TAG_MESH | TAG_COMPOUND) => {
+        tag @ (TAG_MESH | TAG_FIELD | TAG_COMPOUND) => {
             refs(tag, r.u64()?).ok_or(SnapshotError::MissingShape)?
         }
         4 => {
@@ -868,13 +887,14 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         let same = |x: &Shape<'a>, y: &Shape<'a>| match (x, y) {
             (Shape::Hull(p), Shape::Hull(q)) => core::ptr::eq(*p, *q),
             (Shape::Mesh(p), Shape::Mesh(q)) => core::ptr::eq(*p, *q),
+            (Shape::HeightField(p), Shape::HeightField(q)) => core::ptr::eq(*p, *q),
             (Shape::Compound(p), Shape::Compound(q)) => core::ptr::eq(*p, *q),
             _ => false,
         };
         for (_, b) in self.bodies.iter() {
             if matches!(
                 b.shape,
-                Shape::Hull(_) | Shape::Mesh(_) | Shape::Compound(_)
+                Shape::Hull(_) | Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_)
             ) && !out.iter().flatten().any(|x| same(x, &b.shape))
             {
                 if let Some(slot) = out.get_mut(n) {

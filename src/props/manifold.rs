@@ -234,7 +234,7 @@ fn outside_by(shape: &Shape, p: Vec3) -> f32 {
         }
         // Not convex: the narrow phase never sees them; the least over their parts
         // would be the answer, and no property asks for it.
-        Shape::Mesh(_) | Shape::Compound(_) => f32::NAN,
+        Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => f32::NAN,
     }
 }
 

@@ -54,7 +54,7 @@ pub fn shape_size_in_range(shape: &Shape) -> bool {
             ok(0.5 * height) && ok(0.5 * longest)
         }
         // Not single convex shapes: their parts are checked where they are built.
-        Shape::Mesh(_) | Shape::Compound(_) => false,
+        Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => false,
     }
 }
 

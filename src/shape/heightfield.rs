@@ -24,7 +24,7 @@ const RAY_TOL: f32 = 1.0e-5;
 const TINY_DIRECTION: f32 = 1.0e-24;
 
 /// A height field: caller-owned heights (m) on a square grid in the local XZ plane, Y up.
-/// Pure geometry, in the field's local frame: not a [`crate::Shape`] yet.
+/// Pure geometry, in the field's local frame; a body's shape as [`crate::Shape::HeightField`].
 ///
 /// `columns` samples run along local +X and `rows` along local +Z, row-major: sample
 /// `(i, j)` (column `i`, row `j`) is the vertex `(i · cell_size, heights[j · columns + i],
@@ -94,7 +94,7 @@ const TINY_DIRECTION: f32 = 1.0e-24;
 /// # Ok(())
 /// # }
 /// ```
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeightField<'a> {
     /// The `columns · rows` heights in use (m), row-major.
     heights: &'a [f32],

@@ -304,6 +304,10 @@ pub enum Shape<'a> {
     /// and the convex-shape queries of [`crate::collide`] refuse it with
     /// [`Error::NotConvex`].
     Mesh(&'a TriangleMesh<'a>),
+    /// A height field: terrain as a grid of heights (static and kinematic bodies only; no
+    /// volume). Not convex: the mid phase pairs each nearby triangle of its cells with the
+    /// other body, and the convex-shape queries refuse it with [`Error::NotConvex`].
+    HeightField(&'a HeightField<'a>),
     /// Convex parts at poses in the body's frame. Not convex as a whole: the mid phase
     /// pairs each nearby part with the other body, and the convex-shape queries refuse it
     /// with [`Error::NotConvex`].
@@ -349,18 +353,21 @@ impl<'a> Shape<'a> {
     pub fn is_static_only(&self) -> bool {
         matches!(
             self,
-            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_)
+            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_) | Shape::HeightField(_)
         )
     }
 
-    /// True for the shapes the narrow phase takes as they are; false for a mesh or a
-    /// compound, whose parts it takes one at a time.
+    /// True for the shapes the narrow phase takes as they are; false for a mesh, a height
+    /// field or a compound, whose parts it takes one at a time.
     #[inline]
     pub fn is_convex(&self) -> bool {
-        !matches!(self, Shape::Mesh(_) | Shape::Compound(_))
+        !matches!(
+            self,
+            Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_)
+        )
     }
 
-    /// [`Error::NotConvex`] for a mesh or compound (the convex-shape queries' door).
+    /// [`Error::NotConvex`] for a mesh, height field or compound (the convex-shape queries' door).
     pub(crate) fn check_convex(&self) -> Result<(), Error> {
         if self.is_convex() {
             Ok(())
@@ -391,6 +398,7 @@ impl<'a> Shape<'a> {
             Shape::HalfSpace(_) => (Vec3::ZERO, 0),
             Shape::Triangle(t) => t.core_support(dir),
             Shape::Mesh(m) => mesh_support(m, dir),
+            Shape::HeightField(f) => field_support(f, dir),
             Shape::Compound(c) => c.support(dir),
         }
     }
@@ -410,7 +418,7 @@ impl<'a> Shape<'a> {
                 .get(index as usize)
                 .copied()
                 .unwrap_or_default(),
-            Shape::Compound(_) => Vec3::ZERO,
+            Shape::HeightField(_) | Shape::Compound(_) => Vec3::ZERO,
         }
     }
 
@@ -424,7 +432,9 @@ impl<'a> Shape<'a> {
             Shape::Capsule(_) => Some(2),
             Shape::Cuboid(_) => Some(8),
             Shape::Hull(h) => Some(h.vertices().len() as u32),
-            Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::Compound(_) => None,
+            Shape::HalfSpace(_) | Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => {
+                None
+            }
             Shape::Triangle(_) => Some(3),
         }
     }
@@ -445,7 +455,7 @@ impl<'a> Shape<'a> {
     /// For a mesh or compound, the supporting point as a one-vertex face.
     pub fn supporting_face(&self, dir: Vec3) -> Face {
         match self {
-            Shape::Sphere(_) | Shape::Mesh(_) | Shape::Compound(_) => {
+            Shape::Sphere(_) | Shape::Mesh(_) | Shape::HeightField(_) | Shape::Compound(_) => {
                 let (p, i) = self.core_support(dir);
                 let mut f = Face::new(dir.normalize_or(Vec3::Y), FeatureId::vertex(i));
                 f.push(p, FeatureId::vertex(i), FeatureId::vertex(i));
@@ -474,6 +484,7 @@ impl<'a> Shape<'a> {
             Shape::HalfSpace(p) => p.aabb(pose),
             Shape::Triangle(t) => t.aabb(pose),
             Shape::Mesh(m) => m.aabb().transformed(pose),
+            Shape::HeightField(f) => f.aabb().transformed(pose),
             Shape::Compound(c) => c.aabb(pose),
         }
     }
@@ -488,8 +499,8 @@ impl<'a> Shape<'a> {
             Shape::Hull(h) => h.bounding_radius(),
             Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
             Shape::Triangle(t) => t.bounding_radius(),
-            Shape::Mesh(m) => {
-                let b = m.aabb();
+            Shape::Mesh(_) | Shape::HeightField(_) => {
+                let b = self.local_aabb();
                 b.min.abs().max(b.max.abs()).length()
             }
             Shape::Compound(c) => c.bounding_radius(),
@@ -505,7 +516,7 @@ impl<'a> Shape<'a> {
             Shape::Cuboid(b) => 2.0 * b.half_extents.min_elem(),
             Shape::Hull(h) => h.min_extent(),
             Shape::HalfSpace(_) => HALF_SPACE_EXTENT,
-            Shape::Triangle(_) | Shape::Mesh(_) => 0.0,
+            Shape::Triangle(_) | Shape::Mesh(_) | Shape::HeightField(_) => 0.0,
             Shape::Compound(c) => c.min_extent(),
         }
     }
@@ -520,7 +531,7 @@ impl<'a> Shape<'a> {
             Shape::Cuboid(b) => b.mass_properties(density),
             Shape::Hull(h) => h.mass_properties(density),
             Shape::Compound(c) => c.mass_properties(density)?,
-            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_) => {
+            Shape::HalfSpace(_) | Shape::Triangle(_) | Shape::Mesh(_) | Shape::HeightField(_) => {
                 return Err(Error::NoVolume)
             }
         };
@@ -561,6 +572,7 @@ impl<'a> Shape<'a> {
             Shape::HalfSpace(p) => p.cast_ray(&local, max_t),
             Shape::Triangle(t) => t.cast_ray(&local, max_t),
             Shape::Mesh(m) => m.cast_ray(&local, max_t).map(|(_, h)| h),
+            Shape::HeightField(f) => f.cast_ray(&local, max_t).map(|(_, h)| h),
             Shape::Compound(c) => c.cast_ray(&local, max_t).map(|(_, h)| h),
         }?;
         Some(RayHit {
@@ -581,6 +593,24 @@ fn mesh_support(m: &TriangleMesh<'_>, dir: Vec3) -> (Vec3, u32) {
         if d > best_d {
             best_d = d;
             best = (v, i as u32);
+        }
+    }
+    best
+}
+
+/// A height field's furthest sample along `dir` (the first of equals) and its index: the
+/// support of the field's convex hull, by a scan of every sample.
+fn field_support(f: &HeightField<'_>, dir: Vec3) -> (Vec3, u32) {
+    let mut best = (Vec3::ZERO, 0u32);
+    let mut best_d = f32::NEG_INFINITY;
+    let columns = f.columns().max(1);
+    for (k, &h) in f.heights().iter().enumerate() {
+        let (i, j) = (k as u32 % columns, k as u32 / columns);
+        let v = Vec3::new(i as f32 * f.cell_size(), h, j as f32 * f.cell_size());
+        let d = v.dot(dir);
+        if d > best_d {
+            best_d = d;
+            best = (v, k as u32);
         }
     }
     best
