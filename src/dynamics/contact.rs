@@ -388,7 +388,9 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
             group_key = key;
             group_start = write;
         }
-        let (parts, rest) = slots.split_at_mut(write);
+        let Some((parts, rest)) = slots.split_at_mut_checked(write) else {
+            break;
+        };
         let Some(c) = rest.first_mut() else {
             break;
         };

@@ -83,8 +83,8 @@ pub(crate) fn part_pair<'a>(a: &Shape<'a>, b: &Shape<'a>, sub: u32) -> Option<Pa
     }
     let k = sub.checked_sub(1)?;
     let nb = part_count(b).max(1);
-    let (pa, pose_a) = part(a, k / nb)?;
-    let (pb, pose_b) = part(b, k % nb)?;
+    let (pa, pose_a) = part(a, k.checked_div(nb)?)?;
+    let (pb, pose_b) = part(b, k.checked_rem(nb)?)?;
     Some(PartPair {
         a: pa,
         pose_a,
@@ -520,10 +520,13 @@ pub(crate) fn correct_mesh_contact(
         return;
     };
     let nb = part_count(b).max(1);
+    let (Some(i), Some(j)) = (k.checked_div(nb), k.checked_rem(nb)) else {
+        return;
+    };
     if let Some(soup) = Soup::of(a) {
-        correct_internal_edges(m, &soup, k / nb, pose_a, true);
+        correct_internal_edges(m, &soup, i, pose_a, true);
     } else if let Some(soup) = Soup::of(b) {
-        correct_internal_edges(m, &soup, k % nb, pose_b, false);
+        correct_internal_edges(m, &soup, j, pose_b, false);
     }
 }
 
@@ -580,10 +583,11 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
                 .copied()
                 .unwrap_or_default()
         };
-        let keep: HVec<ContactPoint, 4> = choose_four(&points, &point, slop)
-            .iter()
-            .map(&point)
-            .collect();
+        let mut keep: HVec<ContactPoint, 4> = HVec::new();
+        for key in &choose_four(&points, &point, slop) {
+            // Cannot fail: at most four.
+            let _ = keep.push(point(key));
+        }
         for &(k, _) in &points {
             if let Some(c) = group.get_mut(usize::from(k)) {
                 c.len = 0;

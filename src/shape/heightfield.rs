@@ -229,7 +229,7 @@ impl<'a> HeightField<'a> {
         }
         let cell = t / 2;
         let nx = self.cells_x();
-        self.cell_triangle(cell % nx, cell / nx, t % 2)
+        self.cell_triangle(cell.checked_rem(nx)?, cell.checked_div(nx)?, t % 2)
     }
 
     /// Call `f` with the index of every triangle whose bounding box (of its vertices)

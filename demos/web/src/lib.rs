@@ -380,6 +380,12 @@ pub extern "C" fn carom_bodies() -> u32 {
             }
             Shape::HalfSpace(s) => (KIND_HALF_SPACE, s.normal.to_array(), -1.0),
             Shape::Triangle(_) => (KIND_TRIANGLE, [0.0; 3], -1.0),
+            // The page's scenes have none of these; drawn as their bounds' half-extents.
+            _ => {
+                let bounds = b.shape().local_aabb();
+                let half = (bounds.max - bounds.min) * 0.5;
+                (KIND_HULL, half.to_array(), -1.0)
+            }
         };
         let mut flags = match b.kind() {
             BodyKind::Static => FLAG_STATIC,

@@ -10,13 +10,16 @@
 //! ray casts), hull building, GJK distance and intersection, EPA penetration, contact
 //! manifolds, time of impact and movement bounds, and the world: add with every shape
 //! and option, every setter, step and traced step, ray casts and overlap queries,
-//! checksums, snapshot and restore (valid and corrupt), remove, the standard scenes.
+//! checksums, snapshot and restore (valid and corrupt), remove, the standard scenes;
+//! triangle meshes, height fields and compounds built and stepped in a world (the mid
+//! phase), with ray casts, overlaps and a snapshot round trip.
 #![no_std]
 #![no_main]
 
 use carom::collide::{contact, distance, intersects, penetration, SimplexCache};
 use carom::collide::{movement_bounds, segment_closest_points, time_of_impact, Motion, Toi};
 use carom::scenes::{self, Scene};
+use carom::shape::{BvhNode, Compound, CompoundPart, HeightField, TriangleMesh};
 use carom::{
     BodyDesc, ConvexHull, Iso, Material, Quat, QueryFilter, Ray, RayCastHit, Shape, StepTrace,
     Vec3, World, WorldConfig,
@@ -274,6 +277,7 @@ fn main() -> ! {
     acc = acc.wrapping_add(world(w, &shapes, hulls));
     acc = acc.wrapping_add(scene_doors(w, hulls));
     acc = acc.wrapping_add(timestep());
+    acc = acc.wrapping_add(parts(w));
     black_box(acc);
     debug_exit(true)
 }
@@ -305,4 +309,99 @@ fn debug_exit(ok: bool) -> ! {
     });
     #[allow(clippy::empty_loop)]
     loop {}
+}
+
+/// Shapes with parts: a mesh, a height field and a compound built from unknown inputs,
+/// added to the world, stepped (the mid phase), queried and snapshotted.
+fn parts(w: &mut W) -> u32 {
+    let mut acc = 0u32;
+    let Some(vertices) = cortex_m::singleton!(: [Vec3; 4] = [Vec3::ZERO; 4]) else {
+        return 0;
+    };
+    *vertices = [
+        v(-4.0, 0.0, -4.0),
+        v(4.0, 0.0, -4.0),
+        v(4.0, 0.0, 4.0),
+        v(-4.0, 0.0, 4.0),
+    ];
+    let Some(indices) = cortex_m::singleton!(: [[u32; 3]; 2] = [[0, 2, 1], [0, 3, 2]]) else {
+        return 0;
+    };
+    *indices = black_box(*indices);
+    let Some(nodes) = cortex_m::singleton!(: [BvhNode; 3] = [BvhNode::EMPTY; 3]) else {
+        return 0;
+    };
+    let vertices: &'static [Vec3; 4] = vertices;
+    let indices: &'static [[u32; 3]; 2] = indices;
+    let Ok(mesh) = TriangleMesh::build(vertices, indices, nodes) else {
+        return 0;
+    };
+    let Some(mesh) = cortex_m::singleton!(: TriangleMesh<'static> = mesh) else {
+        return 0;
+    };
+    let Some(heights) = cortex_m::singleton!(: [f32; 9] = [0.0; 9]) else {
+        return 0;
+    };
+    for (i, h) in heights.iter_mut().enumerate() {
+        *h = f(i as f32 * 0.1);
+    }
+    let heights: &'static [f32; 9] = heights;
+    let Ok(field) = HeightField::new(heights, black_box(3), black_box(3), f(1.0)) else {
+        return 0;
+    };
+    let Some(field) = cortex_m::singleton!(: HeightField<'static> = field) else {
+        return 0;
+    };
+    let ball = Shape::sphere(f(0.3)).unwrap_or(Shape::Mesh(mesh));
+    let brick = Shape::cuboid(v(0.2, 0.1, 0.3)).unwrap_or(Shape::Mesh(mesh));
+    let Some(pieces) = cortex_m::singleton!(: [CompoundPart<'static>; 2] = [
+        CompoundPart::new(Iso::IDENTITY, ball),
+        CompoundPart::new(Iso::IDENTITY, brick),
+    ]) else {
+        return 0;
+    };
+    pieces[1].pose = Iso::from_position(v(0.5, 0.0, 0.0));
+    let pieces: &'static [CompoundPart<'static>; 2] = pieces;
+    let Ok(compound) = Compound::new(pieces) else {
+        return 0;
+    };
+    let Some(compound) = cortex_m::singleton!(: Compound<'static> = compound) else {
+        return 0;
+    };
+    let _ = w.add(BodyDesc::fixed(Shape::Mesh(mesh)).position(v(0.0, -1.0, 0.0)));
+    let _ = w.add(BodyDesc::fixed(Shape::HeightField(field)).position(v(-1.0, -0.5, -1.0)));
+    let _ = w.add(BodyDesc::dynamic(Shape::Compound(compound)).position(v(0.0, 0.5, 0.0)));
+    let _ = w.add(BodyDesc::dynamic(ball).position(v(0.5, 0.2, 0.5)).ccd(true));
+    for _ in 0..black_box(4) {
+        acc = acc.wrapping_add(w.step().contacts);
+    }
+    if let Ok(ray) = Ray::new(v(0.0, 5.0, 0.0), v(0.0, -1.0, 0.0)) {
+        if let Ok(Some(hit)) = w.cast_ray(&ray, f(50.0), QueryFilter::ALL) {
+            acc = acc.wrapping_add(hit.t as u32);
+        }
+    }
+    let mut out = [carom::BodyHandle {
+        index: 0,
+        generation: 0,
+    }; 4];
+    acc += w
+        .overlap(
+            &Shape::Compound(compound),
+            &black_box(Iso::IDENTITY),
+            QueryFilter::ALL,
+            &mut out,
+        )
+        .unwrap_or(0) as u32;
+    let _ = contact(
+        &Shape::Mesh(mesh),
+        &Iso::IDENTITY,
+        &ball,
+        &Iso::IDENTITY,
+        f(0.1),
+    );
+    let mut buf = [0u8; 8192];
+    if let Ok(n) = w.snapshot(&mut buf) {
+        let _ = w.restore(buf.get(..n).unwrap_or(&[]));
+    }
+    acc.wrapping_add(w.checksum() as u32)
 }
