@@ -13,7 +13,7 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 seconds="${1:-1800}"
 shift || true
 targets=("$@")
-[[ ${#targets[@]} -eq 0 ]] && targets=(narrow_phase hull toi world snapshot)
+[[ ${#targets[@]} -eq 0 ]] && targets=(narrow_phase hull toi world snapshot mesh)
 mkdir -p fuzz/logs
 cargo +nightly fuzz build --debug-assertions --sanitizer none || exit 1
 for t in "${targets[@]}"; do

@@ -840,3 +840,288 @@ pub enum SnapshotInput {
         reseal: bool,
     },
 }
+
+// ---------------------------------------------------------------------------------------
+// The `mesh` target: meshes and height fields built from raw input, their queries against
+// brute force, and a small world of bodies (convex and compound) falling on them.
+
+use carom::shape::{BvhNode, Compound, CompoundPart, HeightField, Ray, TriangleMesh};
+use carom::{Aabb, BodyDesc, World};
+
+/// The level geometry of a `mesh` input.
+#[derive(Arbitrary, Clone, Debug)]
+pub enum GroundInput {
+    /// A triangle mesh: vertices ([`COORD_UNIT`]) and index triples (any values).
+    Mesh {
+        /// Vertices.
+        vertices: Vec<Vec3Input>,
+        /// Index triples.
+        triangles: Vec<[u8; 3]>,
+    },
+    /// A height field: `columns × rows` samples ([`COORD_UNIT`]), a cell size
+    /// ([`SIZE_UNIT`]).
+    Field {
+        /// Samples along x.
+        columns: u8,
+        /// Samples along z.
+        rows: u8,
+        /// Heights, row-major (short input reads as a too-short buffer).
+        heights: Vec<Num>,
+        /// Cell size.
+        cell: Len,
+    },
+}
+
+/// A body falling on the ground: one convex shape, or a compound of up to four.
+#[derive(Arbitrary, Clone, Debug)]
+pub struct FallingInput {
+    /// The parts (one: a plain convex body).
+    pub parts: Vec<(PoseInput, ShapeInput)>,
+    /// Its pose.
+    pub pose: PoseInput,
+    /// Its velocity ([`LINEAR_UNIT`]).
+    pub velocity: Vec3Input,
+    /// Continuous collision on.
+    pub ccd: bool,
+}
+
+/// Input of the `mesh` target.
+#[derive(Arbitrary, Clone, Debug)]
+pub struct MeshInput {
+    /// The ground.
+    pub ground: GroundInput,
+    /// Boxes ([`COORD_UNIT`], corners in any order) for the box query.
+    pub boxes: Vec<(Vec3Input, Vec3Input)>,
+    /// Rays: origin ([`COORD_UNIT`]), direction (any), length ([`SIZE_UNIT`]).
+    pub rays: Vec<(Vec3Input, Vec3Input, Len)>,
+    /// Bodies falling on it.
+    pub bodies: Vec<FallingInput>,
+    /// Steps to take (at most 60).
+    pub steps: u8,
+}
+
+/// Triangle lookups shared by meshes and height fields.
+trait Soup {
+    fn count(&self) -> u32;
+    fn tri(&self, i: u32) -> Option<carom::shape::Triangle>;
+    fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32));
+    fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)>;
+}
+
+impl Soup for TriangleMesh<'_> {
+    fn count(&self) -> u32 {
+        self.triangle_count()
+    }
+    fn tri(&self, i: u32) -> Option<carom::shape::Triangle> {
+        self.triangle(i)
+    }
+    fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32)) {
+        self.query_aabb(aabb, f)
+    }
+    fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)> {
+        self.cast_ray(ray, max_t)
+    }
+}
+
+impl Soup for HeightField<'_> {
+    fn count(&self) -> u32 {
+        self.triangle_count()
+    }
+    fn tri(&self, i: u32) -> Option<carom::shape::Triangle> {
+        self.triangle(i)
+    }
+    fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32)) {
+        self.query_aabb(aabb, f)
+    }
+    fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)> {
+        self.cast_ray(ray, max_t)
+    }
+}
+
+/// Box queries against every triangle's box, ray casts against every triangle (nearest,
+/// lowest index on ties): the same triangles and the same bits.
+fn soup_queries(soup: &dyn Soup, input: &MeshInput) -> Result<(), String> {
+    for (a, b) in input.boxes.iter().take(4) {
+        let (a, b) = (vec3(a, COORD_UNIT), vec3(b, COORD_UNIT));
+        let aabb = Aabb::new(a.min(b), a.max(b));
+        let mut got = Vec::new();
+        soup.boxed(&aabb, &mut |i| got.push(i));
+        got.sort_unstable();
+        let mut want = Vec::new();
+        for i in 0..soup.count() {
+            let Some(t) = soup.tri(i) else {
+                return Err(format!("triangle {i} missing"));
+            };
+            let [p, q, r] = t.vertices;
+            if Aabb::new(p.min(q).min(r), p.max(q).max(r)).overlaps(&aabb) {
+                want.push(i);
+            }
+        }
+        if got != want {
+            return Err(format!("box {aabb:?}: {got:?} vs brute force {want:?}"));
+        }
+    }
+    for (o, d, len) in input.rays.iter().take(4) {
+        let Ok(ray) = Ray::new(vec3(o, COORD_UNIT), vec3(d, 1.0)) else {
+            continue;
+        };
+        let max_t = len.value(SIZE_UNIT);
+        if !(max_t.is_finite() && max_t >= 0.0) {
+            continue;
+        }
+        let got = soup.ray(&ray, max_t);
+        let mut want: Option<(u32, f32)> = None;
+        for i in 0..soup.count() {
+            let Some(t) = soup.tri(i) else { continue };
+            let shape = Shape::Triangle(t);
+            if let Ok(Some(h)) = shape.cast_ray(&Iso::IDENTITY, &ray, max_t) {
+                if want.is_none_or(|(_, w)| h.t < w) {
+                    want = Some((i, h.t));
+                }
+            }
+        }
+        let got = got.map(|(i, h)| (i, h.t));
+        if got.map(|(i, t)| (i, t.to_bits())) != want.map(|(i, t)| (i, t.to_bits())) {
+            return Err(format!(
+                "ray {ray:?} to {max_t}: {got:?} vs brute force {want:?}"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The `mesh` target's property: the ground builds or is refused without a panic; its
+/// queries agree with brute force; bodies (convex or compound, CCD on or off) fall on it
+/// for up to 60 steps with a finite state; a snapshot taken halfway restores into a world
+/// with the same ground and replays the same checksums.
+pub fn mesh_case(input: &MeshInput) -> Result<(), String> {
+    match &input.ground {
+        GroundInput::Mesh {
+            vertices,
+            triangles,
+        } => {
+            let v = points(vertices);
+            let t: Vec<[u32; 3]> = triangles.iter().map(|t| t.map(u32::from)).collect();
+            let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+            let Ok(mesh) = TriangleMesh::build(&v, &t, &mut nodes) else {
+                return Ok(());
+            };
+            soup_queries(&mesh, input)?;
+            falling(Shape::Mesh(&mesh), input)
+        }
+        GroundInput::Field {
+            columns,
+            rows,
+            heights,
+            cell,
+        } => {
+            let h: Vec<f32> = heights.iter().map(|n| n.value(COORD_UNIT)).collect();
+            let cell = cell.value(SIZE_UNIT);
+            let Ok(field) = HeightField::new(&h, u32::from(*columns), u32::from(*rows), cell)
+            else {
+                return Ok(());
+            };
+            soup_queries(&field, input)?;
+            falling(Shape::HeightField(&field), input)
+        }
+    }
+}
+
+type MeshWorld<'a> = World<'a, 8, 512, 64>;
+
+/// The ground and the bodies of `input` (shapes built by the caller) into `w`.
+fn populate<'a>(
+    w: &mut MeshWorld<'a>,
+    ground: Shape<'a>,
+    shapes: &[Option<Shape<'a>>],
+    input: &MeshInput,
+) -> Result<(), String> {
+    w.add(BodyDesc::fixed(ground))
+        .map_err(|e| format!("ground refused: {e:?}"))?;
+    for (b, shape) in input.bodies.iter().zip(shapes) {
+        let Some(shape) = shape else { continue };
+        let desc = BodyDesc::dynamic(*shape)
+            .position(b.pose.iso().position)
+            .rotation(b.pose.iso().rotation)
+            .velocity(vec3(&b.velocity, LINEAR_UNIT))
+            .ccd(b.ccd);
+        // Refusals (static-only shapes, bad values) are fine; nothing may panic.
+        let _ = w.add(desc);
+    }
+    Ok(())
+}
+
+/// Bodies falling on `ground` (see [`mesh_case`]).
+fn falling(ground: Shape<'_>, input: &MeshInput) -> Result<(), String> {
+    // Everything the bodies borrow, built first.
+    let mut built: Vec<Vec<(Iso, Built)>> = Vec::new();
+    for b in input.bodies.iter().take(4) {
+        let parts: Vec<(Iso, Built)> = b
+            .parts
+            .iter()
+            .take(4)
+            .filter_map(|(pose, s)| s.build().map(|x| (pose.iso(), x)))
+            .collect();
+        built.push(parts);
+    }
+    let pieces: Vec<Vec<CompoundPart<'_>>> = built
+        .iter()
+        .map(|parts| {
+            parts
+                .iter()
+                .map(|(pose, b)| CompoundPart::new(*pose, b.shape()))
+                .collect()
+        })
+        .collect();
+    let compounds: Vec<Option<Compound<'_>>> = pieces
+        .iter()
+        .map(|p| {
+            if p.len() > 1 {
+                Compound::new(p).ok()
+            } else {
+                None
+            }
+        })
+        .collect();
+    let shapes: Vec<Option<Shape<'_>>> = (0..input.bodies.len().min(4))
+        .map(|i| match (compounds.get(i), pieces.get(i)) {
+            (Some(Some(c)), _) => Some(Shape::Compound(c)),
+            (_, Some(p)) => p.first().map(|x| x.shape),
+            _ => None,
+        })
+        .collect();
+    let mut w: Box<MeshWorld<'_>> = Box::default();
+    populate(&mut w, ground, &shapes, input)?;
+    let steps = usize::from(input.steps.min(60));
+    let half = steps / 2;
+    for _ in 0..half {
+        w.step();
+    }
+    let mut buf = vec![0u8; MeshWorld::max_snapshot_len()];
+    let n = w
+        .snapshot(&mut buf)
+        .map_err(|e| format!("snapshot: {e:?}"))?;
+    let mut replay = Vec::new();
+    for _ in half..steps {
+        w.step();
+        replay.push(w.checksum());
+    }
+    for h in w.handles() {
+        let Ok(b) = w.body(h) else { continue };
+        if !(b.position().is_finite() && b.linear_velocity().is_finite()) {
+            return Err(format!("body {h:?} went non-finite: {:?}", b.position()));
+        }
+    }
+    let mut again: Box<MeshWorld<'_>> = Box::default();
+    populate(&mut again, ground, &shapes, input)?;
+    again
+        .restore(buf.get(..n).unwrap_or(&[]))
+        .map_err(|e| format!("restore: {e:?}"))?;
+    for (k, want) in replay.into_iter().enumerate() {
+        again.step();
+        if again.checksum() != want {
+            return Err(format!("replay differs {} steps after the snapshot", k + 1));
+        }
+    }
+    Ok(())
+}
