@@ -18,8 +18,17 @@ fn hulls() -> &'static [ConvexHull] {
     Box::leak(v.into_boxed_slice())
 }
 
+/// The `mesh_pile` terrain, leaked like the hulls so worlds can borrow it.
+fn terrain() -> &'static carom::shape::HeightField<'static> {
+    let mut heights = vec![0.0f32; scenes::MESH_PILE_SAMPLES];
+    scenes::mesh_pile_heights(&mut heights);
+    let heights: &'static [f32] = Box::leak(heights.into_boxed_slice());
+    Box::leak(Box::new(scenes::mesh_pile_field(heights).unwrap()))
+}
+
 fn bench_scenes(c: &mut Criterion) {
     let hulls = hulls();
+    let terrain = terrain();
     let mut group = c.benchmark_group("scene_step");
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(20));
@@ -30,7 +39,7 @@ fn bench_scenes(c: &mut Criterion) {
             ..scene.config()
         };
         template.set_config(cfg).unwrap();
-        scene.build(&mut template, hulls).unwrap();
+        scene.build_on(&mut template, hulls, Some(terrain)).unwrap();
         let steps = scene.steps();
         group.bench_function(scene.name(), |b| {
             b.iter_custom(|iters| {

@@ -465,3 +465,75 @@ fn a_ball_rolls_down_a_height_field_slope_at_five_sevenths_g_sin_theta() {
         assert!((height_over * theta.cos() - r).abs() < 5e-3, "{p:?}");
     }
 }
+
+/// The `mesh_pile` scene: 300 mixed bodies fall on 10,368 terrain triangles; none ends
+/// below the terrain under it, the run repeats bit for bit, and no pair or contact is
+/// dropped at the reference capacities used here.
+#[test]
+fn the_mesh_pile_settles_on_its_terrain_and_repeats() {
+    // A world this size is built on the stack before it is boxed (see `World`'s docs).
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(mesh_pile_run)
+        .unwrap()
+        .join()
+        .unwrap();
+}
+
+fn mesh_pile_run() {
+    use carom::scenes::{self, Scene};
+    let hulls = {
+        let mut v =
+            vec![carom::ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap(); 8];
+        scenes::make_hulls(&mut v, scenes::SEED).unwrap();
+        v
+    };
+    let mut heights = vec![0.0; scenes::MESH_PILE_SAMPLES];
+    scenes::mesh_pile_heights(&mut heights);
+    let field = scenes::mesh_pile_field(&heights).unwrap();
+    assert_eq!(field.triangle_count(), 10_368);
+    let run = || {
+        let mut w: Box<World<'_, 512, 8192, 64>> = Box::default();
+        assert!(
+            Scene::MeshPile.build(&mut w, &hulls).is_err(),
+            "needs its terrain"
+        );
+        Scene::MeshPile
+            .build_on(&mut w, &hulls, Some(&field))
+            .unwrap();
+        let mut dropped = 0;
+        for _ in 0..Scene::MeshPile.steps() {
+            let r = w.step();
+            dropped += r.dropped_contacts + r.dropped_pairs;
+        }
+        assert_eq!(dropped, 0);
+        let half = (scenes::MESH_PILE_COLUMNS - 1) as f32 * scenes::MESH_PILE_CELL * 0.5;
+        let mut on_terrain = 0;
+        for h in w.handles() {
+            let b = w.body(h).unwrap();
+            let p = b.position();
+            if b.kind() != carom::BodyKind::Dynamic || p.x.abs() >= half || p.z.abs() >= half {
+                continue;
+            }
+            on_terrain += 1;
+            // The terrain's height under the body: a ray straight down from far above.
+            let down = Ray::new(Vec3::new(p.x, 50.0, p.z), -Vec3::Y).unwrap();
+            let ground = Shape::HeightField(&field)
+                .cast_ray(
+                    &Iso::from_position(Vec3::new(-half, 0.0, -half)),
+                    &down,
+                    100.0,
+                )
+                .unwrap()
+                .unwrap();
+            assert!(
+                p.y > ground.point.y - 0.05,
+                "body at {p:?} below the terrain at {:?}",
+                ground.point
+            );
+        }
+        assert!(on_terrain > 250, "{on_terrain} bodies on the terrain");
+        w.checksum()
+    };
+    assert_eq!(run(), run());
+}

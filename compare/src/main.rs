@@ -22,25 +22,61 @@ use carom::scenes::queries::{
     self, PoseQuery, QuerySet, BALL_RADIUS, BOX_HALF, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
 };
 use carom::scenes::{self, Scene, SceneBody, SceneKind, SceneShape, JOLT_PYRAMID_GAP};
+use carom::shape::HeightField;
 use carom::{BodyKind, ConvexHull, Iso, Shape, World, WorldConfig};
 use parry3d::query::{
     self as pq, ContactManifold, DefaultQueryDispatcher, PersistentQueryDispatcher,
 };
-use parry3d::shape::{Ball, ConvexPolyhedron, Cuboid, SharedShape};
+use parry3d::shape::{Ball, ConvexPolyhedron, Cuboid, SharedShape, TriMeshFlags};
 use rapier3d::prelude::{
     CoefficientCombineRule, ColliderBuilder, PhysicsWorld, Pose, RigidBodyBuilder, RigidBodyHandle,
     Rotation, Vector,
 };
 
 /// The scenes run when none is named.
-const DEFAULT_SCENES: [Scene; 6] = [
+const DEFAULT_SCENES: [Scene; 7] = [
     Scene::Pyramid20,
     Scene::Pyramid100,
     Scene::Boxes,
     Scene::Spheres,
     Scene::Hulls,
     Scene::JoltPyramid,
+    Scene::MeshPile,
 ];
+
+/// The `mesh_pile` terrain for carom, built once and leaked so every world can borrow it.
+fn terrain() -> Result<&'static HeightField<'static>, Fail> {
+    let mut heights = vec![0.0f32; scenes::MESH_PILE_SAMPLES];
+    scenes::mesh_pile_heights(&mut heights);
+    let heights: &'static [f32] = Box::leak(heights.into_boxed_slice());
+    Ok(Box::leak(Box::new(scenes::mesh_pile_field(heights)?)))
+}
+
+/// The same terrain for rapier: a triangle mesh of the height field's triangles over its
+/// samples (vertex `j · columns + i` is sample `(i, j)`), with rapier's internal-edge
+/// fix on (`TriMeshFlags::FIX_INTERNAL_EDGES`, its counterpart of carom's rule).
+fn rapier_terrain() -> Result<SharedShape, Fail> {
+    let field = terrain()?;
+    let (n, cell) = (field.columns(), field.cell_size());
+    let mut vertices = Vec::new();
+    for (k, &h) in field.heights().iter().enumerate() {
+        let (i, j) = (k as u32 % n, k as u32 / n);
+        vertices.push(Vector::new(i as f32 * cell, h, j as f32 * cell));
+    }
+    let index = |p: carom::Vec3| {
+        let (i, j) = ((p.x / cell).round() as u32, (p.z / cell).round() as u32);
+        j * n + i
+    };
+    let mut indices = Vec::new();
+    for t in 0..field.triangle_count() {
+        let tri = field
+            .triangle(t)
+            .ok_or_else(|| Fail(format!("terrain triangle {t}")))?;
+        indices.push(tri.vertices.map(index));
+    }
+    SharedShape::trimesh_with_flags(vertices, indices, TriMeshFlags::FIX_INTERNAL_EDGES)
+        .map_err(|e| Fail(format!("rapier trimesh: {e:?}")))
+}
 
 /// Hulls the hull scenes cycle through (as `benches/scenes.rs`).
 const SCENE_HULLS: usize = 64;
@@ -371,6 +407,10 @@ fn stability(scene: Scene, o: &Outcome, sleeping: Option<&Outcome>) -> String {
             "{} outside walls, {} below ground",
             o.outside_walls, o.below_ground
         ),
+        Scene::MeshPile => format!(
+            "{} fell through (y < 0); {}/{} awake",
+            o.below_ground, o.awake, o.dynamic
+        ),
         _ => format!(
             "watched moved ({:.3}, {:.3}, {:.3}) m; {} below ground",
             x1 - x0,
@@ -409,7 +449,7 @@ fn carom_run<'a, const B: usize, const C: usize, const E: usize>(
         sleep_enabled: sleep,
         ..scene.config()
     })?;
-    let watch = scene.build(w, hulls)?;
+    let watch = scene.build_on(w, hulls, Some(terrain()?))?;
     let mut o = Outcome {
         steps,
         watched_start: v3(w.body(watch)?.position()),
@@ -502,6 +542,7 @@ fn rapier_build(
                     .cloned()
                     .ok_or_else(|| Fail(format!("no hull {i}")))?,
             ),
+            SceneShape::Terrain => ColliderBuilder::new(rapier_terrain()?),
         }
         .density(b.density)
         // rapier has one friction coefficient: the static one. carom's combine rules:

@@ -41,7 +41,7 @@ use crate::shape::{HeightField, Triangle, TriangleMesh};
 
 /// Most part pairs one body pair may have contacts for at a time (a box on a mesh whose
 /// triangles are much smaller than it reaches this; the rest are dropped and counted).
-pub const MAX_PAIR_PARTS: usize = 64;
+pub const MAX_PAIR_PARTS: usize = 128;
 
 /// The two convex parts of a part contact, each with its pose in its body's frame (`None`
 /// when the part's frame is the body's: a convex body, a mesh triangle).
@@ -571,7 +571,7 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
                     *g = true;
                 }
                 for i in 0..c.len {
-                    // Cannot fail: at most 4 points for each of at most 64 contacts.
+                    // Cannot fail: at most 4 points for each of MAX_PAIR_PARTS contacts.
                     let _ = points.push((k as u8, i));
                 }
             }

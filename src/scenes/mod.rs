@@ -20,7 +20,7 @@ use crate::dynamics::BodyHandle;
 use crate::error::{Error, Input};
 use crate::math::Vec3;
 use crate::rng::SplitMix64;
-use crate::shape::ConvexHull;
+use crate::shape::{ConvexHull, HeightField};
 use crate::World;
 
 pub mod narrow;
@@ -71,11 +71,15 @@ pub enum Scene {
     /// Jolt Physics' `PerformanceTest` pyramid (`PerformanceTest/PyramidScene.h`): 1240
     /// boxes of 2 m in 15 square layers, 500 steps. See [`jolt_pyramid`].
     JoltPyramid,
+    /// 300 mixed bodies (boxes, spheres, capsules, hulls) falling on a bumpy height field
+    /// of 10,368 triangles, 300 steps (issue 9's "mesh pile"). Its terrain comes from the
+    /// caller: see [`mesh_pile_heights`] and [`Scene::build_on`].
+    MeshPile,
 }
 
 impl Scene {
     /// Every scene, in the order of SCENES.md, then `jolt_pyramid`.
-    pub const ALL: [Scene; 10] = [
+    pub const ALL: [Scene; 11] = [
         Scene::Pyramid20,
         Scene::Pyramid100,
         Scene::Boxes,
@@ -86,6 +90,7 @@ impl Scene {
         Scene::Bullets,
         Scene::Tower,
         Scene::JoltPyramid,
+        Scene::MeshPile,
     ];
 
     /// The reference scenes whose checksums after their steps are kept in
@@ -105,6 +110,7 @@ impl Scene {
             Scene::Bullets => "bullets",
             Scene::Tower => "tower",
             Scene::JoltPyramid => "jolt_pyramid",
+            Scene::MeshPile => "mesh_pile",
         }
     }
 
@@ -118,7 +124,7 @@ impl Scene {
         match self {
             Scene::Pyramid20 | Scene::JoltPyramid => 500,
             Scene::Pyramid100 => 200,
-            Scene::Boxes | Scene::Spheres | Scene::Hulls => 300,
+            Scene::Boxes | Scene::Spheres | Scene::Hulls | Scene::MeshPile => 300,
             Scene::Bullet => 60,
             Scene::Mixed | Scene::Bullets | Scene::Tower => 1000,
         }
@@ -137,6 +143,7 @@ impl Scene {
             Scene::Bullets => 6 + BULLETS,
             Scene::Tower => 11,
             Scene::JoltPyramid => 1 + JOLT_PYRAMID_BOXES,
+            Scene::MeshPile => 1 + MESH_PILE_BODIES,
         }
     }
 
@@ -146,7 +153,7 @@ impl Scene {
         match self {
             Scene::Pyramid20 => pyramid_top(20),
             Scene::Pyramid100 => pyramid_top(100),
-            Scene::Boxes | Scene::Hulls | Scene::Bullet => 1,
+            Scene::Boxes | Scene::Hulls | Scene::Bullet | Scene::MeshPile => 1,
             Scene::Spheres | Scene::Mixed => 5,
             Scene::Bullets => 6,
             Scene::Tower => 10,
@@ -177,6 +184,7 @@ impl Scene {
             Scene::Bullets => bullets_bodies(f),
             Scene::Tower => tower_bodies(10, f),
             Scene::JoltPyramid => jolt_pyramid_bodies(f),
+            Scene::MeshPile => mesh_pile_bodies(hulls_len, f),
         }
     }
 
@@ -189,7 +197,19 @@ impl Scene {
         world: &mut World<'a, B, C, E>,
         hulls: &'a [ConvexHull],
     ) -> Result<BodyHandle, Error> {
-        add_bodies(world, hulls, self.watched(), |f| {
+        self.build_on(world, hulls, None)
+    }
+
+    /// [`Scene::build`], with the terrain [`SceneShape::Terrain`] stands for (`mesh_pile`
+    /// needs it: `None` there is `Error::OutOfRange(Input::Config)`; the other scenes
+    /// ignore it). Build it with [`mesh_pile_field`].
+    pub fn build_on<'a, const B: usize, const C: usize, const E: usize>(
+        self,
+        world: &mut World<'a, B, C, E>,
+        hulls: &'a [ConvexHull],
+        terrain: Option<&'a HeightField<'a>>,
+    ) -> Result<BodyHandle, Error> {
+        add_bodies(world, hulls, terrain, self.watched(), |f| {
             self.for_each_body(hulls.len(), f)
         })
     }
@@ -269,13 +289,14 @@ type Sink<'f, E> = &'f mut dyn FnMut(&SceneBody) -> Result<(), E>;
 fn add_bodies<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     hulls: &'a [ConvexHull],
+    terrain: Option<&'a HeightField<'a>>,
     watch: usize,
     each: impl FnOnce(Sink<'_, Error>) -> Result<(), Error>,
 ) -> Result<BodyHandle, Error> {
     let mut n = 0usize;
     let mut watched = None;
     each(&mut |body: &SceneBody| {
-        let h = world.add(body.desc(hulls)?)?;
+        let h = world.add(body.desc_on(hulls, terrain)?)?;
         if n == watch {
             watched = Some(h);
         }
@@ -324,7 +345,7 @@ pub fn pyramid<'a, const B: usize, const C: usize, const E: usize>(
     base: u32,
 ) -> Result<BodyHandle, Error> {
     let top = pyramid_top(base as usize);
-    add_bodies(world, &[], top, |f| pyramid_bodies(base, f))
+    add_bodies(world, &[], None, top, |f| pyramid_bodies(base, f))
 }
 
 fn boxes_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
@@ -337,7 +358,9 @@ fn boxes_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
 pub fn boxes<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], Scene::Boxes.watched(), |f| boxes_bodies(f))
+    add_bodies(world, &[], None, Scene::Boxes.watched(), |f| {
+        boxes_bodies(f)
+    })
 }
 
 fn spheres_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
@@ -361,7 +384,9 @@ fn spheres_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
 pub fn spheres<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], Scene::Spheres.watched(), |f| spheres_bodies(f))
+    add_bodies(world, &[], None, Scene::Spheres.watched(), |f| {
+        spheres_bodies(f)
+    })
 }
 
 /// `n`×`n`×`n` copies of `body`, spacing 1.2, centred on x = z = 0, lowest layer at
@@ -416,7 +441,7 @@ pub fn hull_pile<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     hulls: &'a [ConvexHull],
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, hulls, Scene::Hulls.watched(), |f| {
+    add_bodies(world, hulls, None, Scene::Hulls.watched(), |f| {
         hull_pile_bodies(hulls.len(), f)
     })
 }
@@ -441,7 +466,9 @@ fn bullet_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
 pub fn bullet<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], Scene::Bullet.watched(), |f| bullet_bodies(f))
+    add_bodies(world, &[], None, Scene::Bullet.watched(), |f| {
+        bullet_bodies(f)
+    })
 }
 
 /// The configuration of the `bullet` scene: the default with zero gravity.
@@ -509,7 +536,7 @@ pub fn mixed<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     hulls: &'a [ConvexHull],
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, hulls, Scene::Mixed.watched(), |f| {
+    add_bodies(world, hulls, None, Scene::Mixed.watched(), |f| {
         mixed_bodies(hulls.len(), f)
     })
 }
@@ -585,7 +612,9 @@ fn bullets_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
 pub fn bullets<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], Scene::Bullets.watched(), |f| bullets_bodies(f))
+    add_bodies(world, &[], None, Scene::Bullets.watched(), |f| {
+        bullets_bodies(f)
+    })
 }
 
 fn tower_bodies<E>(height: u32, f: Sink<'_, E>) -> Result<(), E> {
@@ -604,7 +633,9 @@ pub fn tower<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     height: u32,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], height as usize, |f| tower_bodies(height, f))
+    add_bodies(world, &[], None, height as usize, |f| {
+        tower_bodies(height, f)
+    })
 }
 
 /// Layers of the `jolt_pyramid` scene.
@@ -672,9 +703,94 @@ fn jolt_pyramid_bodies<E>(f: Sink<'_, E>) -> Result<(), E> {
 pub fn jolt_pyramid<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
 ) -> Result<BodyHandle, Error> {
-    add_bodies(world, &[], Scene::JoltPyramid.watched(), |f| {
+    add_bodies(world, &[], None, Scene::JoltPyramid.watched(), |f| {
         jolt_pyramid_bodies(f)
     })
+}
+
+/// Samples per side of the `mesh_pile` terrain: 72 × 72 cells, 10,368 triangles.
+pub const MESH_PILE_COLUMNS: u32 = 73;
+
+/// Cell size of the `mesh_pile` terrain (m): 36 m a side.
+pub const MESH_PILE_CELL: f32 = 0.5;
+
+/// Heights of the `mesh_pile` terrain.
+pub const MESH_PILE_SAMPLES: usize = (MESH_PILE_COLUMNS * MESH_PILE_COLUMNS) as usize;
+
+/// Dynamic bodies of `mesh_pile`.
+pub const MESH_PILE_BODIES: usize = 300;
+
+/// `|2 frac(x) − 1|` for `x ≥ 0`: a triangle wave of period 1 between 0 and 1, by
+/// integer truncation (the same bits everywhere).
+fn triangle_wave(x: f32) -> f32 {
+    let frac = x - (x as u32) as f32;
+    let t = 2.0 * frac - 1.0;
+    if t < 0.0 {
+        -t
+    } else {
+        t
+    }
+}
+
+/// The `mesh_pile` terrain's heights (m), row-major as [`HeightField`] reads them, into
+/// `out` (its first [`MESH_PILE_SAMPLES`]; fewer if it is shorter): two crossed ridges
+/// of triangle waves, 1.2 m at their highest, with a finer ripple. Plain `+ − × /` and
+/// integer truncation, no trigonometry: the same bits on every target and backend.
+pub fn mesh_pile_heights(out: &mut [f32]) {
+    let n = MESH_PILE_COLUMNS;
+    for (k, h) in out.iter_mut().enumerate().take(MESH_PILE_SAMPLES) {
+        let (i, j) = (k as u32 % n, k as u32 / n);
+        let (x, z) = (i as f32, j as f32);
+        *h = 1.2 * triangle_wave(x / 24.0) * triangle_wave(z / 18.0)
+            + 0.15 * triangle_wave((x + 2.0 * z) / 7.0);
+    }
+}
+
+/// The `mesh_pile` terrain over `heights` (from [`mesh_pile_heights`]), for
+/// [`Scene::build_on`].
+pub fn mesh_pile_field(heights: &[f32]) -> Result<HeightField<'_>, Error> {
+    HeightField::new(
+        heights,
+        MESH_PILE_COLUMNS,
+        MESH_PILE_COLUMNS,
+        MESH_PILE_CELL,
+    )
+}
+
+/// `mesh_pile`: the terrain (its corner at `(−18, 0, −18)`, centred on the origin), then
+/// 300 bodies in a 10 × 10 × 3 grid 2 m apart, 3 m above the terrain's top and 1.5 m
+/// between layers: boxes, spheres, capsules and hulls in turn, of varied sizes, turned
+/// and moving sideways at random (seeded). Needs a hull (`hulls_len ≥ 1`).
+fn mesh_pile_bodies<E: From<Error>>(hulls_len: usize, f: Sink<'_, E>) -> Result<(), E> {
+    if hulls_len == 0 {
+        return Err(Error::OutOfRange(Input::Config).into());
+    }
+    let half = (MESH_PILE_COLUMNS - 1) as f32 * MESH_PILE_CELL * 0.5;
+    f(&SceneBody::fixed(SceneShape::Terrain).at(Vec3::new(-half, 0.0, -half)))?;
+    let mut rng = SplitMix64::new(SEED ^ 0x3E54);
+    for n in 0..MESH_PILE_BODIES {
+        let (x, z, y) = (n % 10, (n / 10) % 10, n / 100);
+        let s = rng.range(0.7, 1.3);
+        let shape = match n % 4 {
+            0 => cuboid(0.4 * s, 0.3 * s, 0.35 * s),
+            1 => SceneShape::Sphere { radius: 0.35 * s },
+            2 => SceneShape::Capsule {
+                half_height: 0.3 * s,
+                radius: 0.25 * s,
+            },
+            _ => SceneShape::Hull(n % hulls_len),
+        };
+        let p = Vec3::new(
+            (x as f32 - 4.5) * 2.0 + rng.range(-0.3, 0.3),
+            4.5 + y as f32 * 1.5,
+            (z as f32 - 4.5) * 2.0 + rng.range(-0.3, 0.3),
+        );
+        let mut body = SceneBody::dynamic(shape).at(p);
+        body.rotation = rng.rotation();
+        body.velocity = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
+        f(&body)?;
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -707,7 +823,7 @@ mod tests {
 
     #[test]
     fn hull_scenes_need_a_hull_and_stay_below_the_count_given() {
-        for scene in [Scene::Hulls, Scene::Mixed] {
+        for scene in [Scene::Hulls, Scene::Mixed, Scene::MeshPile] {
             let r: Result<(), Error> = scene.for_each_body(0, |_| Ok(()));
             assert_eq!(r, Err(Error::OutOfRange(Input::Config)));
             let r: Result<(), Error> = scene.for_each_body(3, |b| match b.shape {

@@ -6,7 +6,7 @@
 use crate::dynamics::body::{BodyDesc, Material};
 use crate::error::{Error, Input};
 use crate::math::{Quat, Vec3};
-use crate::shape::{ConvexHull, Shape};
+use crate::shape::{ConvexHull, HeightField, Shape};
 
 /// The collision shape of a [`SceneBody`], in the body's frame (centred on its origin).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,6 +33,11 @@ pub enum SceneShape {
     /// the `hulls_len` given to [`super::Scene::for_each_body`]). Another engine should
     /// build its hull from that hull's [`ConvexHull::vertices`], so both see one polytope.
     Hull(usize),
+    /// The `mesh_pile` terrain: the height field of [`super::mesh_pile_heights`] with
+    /// [`super::MESH_PILE_COLUMNS`] samples a side, [`super::MESH_PILE_CELL`] apart, its
+    /// corner at the body's position. Another engine builds it from the same heights (as
+    /// a triangle mesh of the same triangles: [`crate::shape::HeightField::triangle`]).
+    Terrain,
 }
 
 /// How a [`SceneBody`] moves.
@@ -130,9 +135,23 @@ impl SceneBody {
     }
 
     /// The carom shape; `hulls` resolves [`SceneShape::Hull`] (an index past its end is
-    /// `Error::OutOfRange(Input::Config)`).
+    /// `Error::OutOfRange(Input::Config)`), and [`SceneShape::Terrain`] needs
+    /// [`SceneBody::shape_on`] (here it is `Error::OutOfRange(Input::Config)`).
     pub fn shape<'a>(&self, hulls: &'a [ConvexHull]) -> Result<Shape<'a>, Error> {
+        self.shape_on(hulls, None)
+    }
+
+    /// [`SceneBody::shape`], with `terrain` for [`SceneShape::Terrain`] (`None`:
+    /// `Error::OutOfRange(Input::Config)`).
+    pub fn shape_on<'a>(
+        &self,
+        hulls: &'a [ConvexHull],
+        terrain: Option<&'a HeightField<'a>>,
+    ) -> Result<Shape<'a>, Error> {
         match self.shape {
+            SceneShape::Terrain => terrain
+                .map(Shape::HeightField)
+                .ok_or(Error::OutOfRange(Input::Config)),
             SceneShape::Sphere { radius } => Shape::sphere(radius),
             SceneShape::Capsule {
                 half_height,
@@ -150,7 +169,16 @@ impl SceneBody {
     /// field not described here keeps [`BodyDesc`]'s default. [`crate::World::add`]
     /// validates it.
     pub fn desc<'a>(&self, hulls: &'a [ConvexHull]) -> Result<BodyDesc<'a>, Error> {
-        let shape = self.shape(hulls)?;
+        self.desc_on(hulls, None)
+    }
+
+    /// [`SceneBody::desc`], with `terrain` for [`SceneShape::Terrain`].
+    pub fn desc_on<'a>(
+        &self,
+        hulls: &'a [ConvexHull],
+        terrain: Option<&'a HeightField<'a>>,
+    ) -> Result<BodyDesc<'a>, Error> {
+        let shape = self.shape_on(hulls, terrain)?;
         let desc = match self.kind {
             SceneKind::Dynamic => BodyDesc::dynamic(shape),
             SceneKind::Static => BodyDesc::fixed(shape),
