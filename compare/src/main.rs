@@ -241,6 +241,12 @@ struct Outcome {
     below_ground: usize,
     /// Dynamic bodies whose centre ended outside the `spheres` walls (|x| or |z| > 10).
     outside_walls: usize,
+    /// Dynamic bodies whose centre ended beyond the `mesh_pile` terrain's edge (|x| or
+    /// |z| >= 18: they rolled off it).
+    off_terrain: usize,
+    /// Dynamic bodies below y = 0 (the terrain's lowest point) but over the terrain:
+    /// through it.
+    below_terrain: usize,
     /// Dynamic bodies awake at the end.
     awake: usize,
     /// Dynamic bodies.
@@ -408,8 +414,8 @@ fn stability(scene: Scene, o: &Outcome, sleeping: Option<&Outcome>) -> String {
             o.outside_walls, o.below_ground
         ),
         Scene::MeshPile => format!(
-            "{} fell through (y < 0); {}/{} awake",
-            o.below_ground, o.awake, o.dynamic
+            "{} rolled off the edge, {} below y = 0 ({} of them over the terrain); {}/{} awake",
+            o.off_terrain, o.below_ground, o.below_terrain, o.awake, o.dynamic
         ),
         _ => format!(
             "watched moved ({:.3}, {:.3}, {:.3}) m; {} below ground",
@@ -476,6 +482,9 @@ fn carom_run<'a, const B: usize, const C: usize, const E: usize>(
         o.dynamic += 1;
         o.below_ground += usize::from(p.y < 0.0);
         o.outside_walls += usize::from(p.x.abs() > 10.0 || p.z.abs() > 10.0);
+        let over = p.x.abs() < 18.0 && p.z.abs() < 18.0;
+        o.off_terrain += usize::from(!over);
+        o.below_terrain += usize::from(over && p.y < 0.0);
         o.awake += usize::from(b.is_awake());
     }
     Ok(o)
@@ -590,6 +599,9 @@ fn rapier_scene(
         o.dynamic += 1;
         o.below_ground += usize::from(p.y < 0.0);
         o.outside_walls += usize::from(p.x.abs() > 10.0 || p.z.abs() > 10.0);
+        let over = p.x.abs() < 18.0 && p.z.abs() < 18.0;
+        o.off_terrain += usize::from(!over);
+        o.below_terrain += usize::from(over && p.y < 0.0);
         o.awake += usize::from(!b.is_sleeping());
     }
     Ok(o)
