@@ -5,9 +5,16 @@
 use carom::shape::{BvhNode, Compound, CompoundPart, HeightField, TriangleMesh};
 use carom::{BodyDesc, Iso, Material, QueryFilter, Ray, Shape, Vec3, World};
 
+/// The comparison ground: a static box whose top face is the plane y = 0.
+fn box_ground() -> BodyDesc<'static> {
+    BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
+        .position(Vec3::new(0.0, -0.5, 0.0))
+}
+
 /// A flat grid of `n × n` square cells of `cell` metres at height 0, centred on the
-/// origin, two triangles per cell (counter-clockwise seen from +Y).
-fn flat_grid(n: u32, cell: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+/// origin, two triangles per cell (counter-clockwise seen from +Y), with the node storage
+/// its mesh needs.
+fn flat_grid(n: u32, cell: f32) -> (Vec<Vec3>, Vec<[u32; 3]>, Vec<BvhNode>) {
     let half = n as f32 * cell * 0.5;
     let mut v = Vec::new();
     for j in 0..=n {
@@ -27,7 +34,8 @@ fn flat_grid(n: u32, cell: f32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
             t.push([at(i, j), at(i + 1, j + 1), at(i + 1, j)]);
         }
     }
-    (v, t)
+    let nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    (v, t, nodes)
 }
 
 type Small<'a> = World<'a, 16, 512>;
@@ -48,8 +56,7 @@ fn track(world: &mut Small<'_>, h: carom::BodyHandle, steps: usize) -> Vec<(Vec3
 /// height, no bounce on the seams.
 #[test]
 fn a_box_rests_on_a_tessellated_plane_as_on_one_plane() {
-    let (v, t) = flat_grid(24, 0.4);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(24, 0.4);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let rest = |ground: BodyDesc<'_>| {
         let mut w: Small<'_> = World::new();
@@ -65,10 +72,7 @@ fn a_box_rests_on_a_tessellated_plane_as_on_one_plane() {
         track(&mut w, h, 180)
     };
     let on_mesh = rest(BodyDesc::fixed(Shape::Mesh(&mesh)));
-    let on_box = rest(
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0)),
-    );
+    let on_box = rest(box_ground());
     let (mesh_end, box_end) = (on_mesh.last().unwrap().0, on_box.last().unwrap().0);
     assert!(
         (mesh_end.y - box_end.y).abs() < 1e-3,
@@ -90,8 +94,7 @@ fn a_box_rests_on_a_tessellated_plane_as_on_one_plane() {
 /// ground (kinetic friction), with no vertical velocity spike on the seams.
 #[test]
 fn a_box_slides_across_triangle_seams_like_on_one_plane() {
-    let (v, t) = flat_grid(40, 0.25);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(40, 0.25);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let slide = |ground: BodyDesc<'_>| {
         let mut w: Small<'_> = World::new();
@@ -106,10 +109,7 @@ fn a_box_slides_across_triangle_seams_like_on_one_plane() {
         track(&mut w, h, 90)
     };
     let on_mesh = slide(BodyDesc::fixed(Shape::Mesh(&mesh)));
-    let on_box = slide(
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0)),
-    );
+    let on_box = slide(box_ground());
     let stop = |track: &[(Vec3, Vec3)]| track.last().unwrap().0.x;
     let (d_mesh, d_box) = (stop(&on_mesh) + 3.0, stop(&on_box) + 3.0);
     // v² / (2 μk g) = 16 / (2 · 0.4 · 9.81) = 2.04 m.
@@ -127,8 +127,7 @@ fn a_box_slides_across_triangle_seams_like_on_one_plane() {
 /// A ball rolling across the seams of a mesh keeps the speed it has on one plane.
 #[test]
 fn a_ball_rolls_across_seams_without_losing_speed() {
-    let (v, t) = flat_grid(20, 0.5);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(20, 0.5);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let roll = |ground: BodyDesc<'_>| {
         let mut w: Small<'_> = World::new();
@@ -145,10 +144,7 @@ fn a_ball_rolls_across_seams_without_losing_speed() {
         track(&mut w, h, 120)
     };
     let on_mesh = roll(BodyDesc::fixed(Shape::Mesh(&mesh)));
-    let on_box = roll(
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0)),
-    );
+    let on_box = roll(box_ground());
     let (vm, vb) = (on_mesh.last().unwrap().1, on_box.last().unwrap().1);
     assert!(vb.x > 1.8, "rolling on a box ground: {vb:?}");
     assert!((vm.x - vb.x).abs() < 0.02, "mesh {vm:?} vs box {vb:?}");
@@ -177,11 +173,7 @@ fn a_compound_rests_on_its_parts() {
     ];
     let dumbbell = Compound::new(&parts).unwrap();
     let mut w: Small<'_> = World::new();
-    w.add(
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0)),
-    )
-    .unwrap();
+    w.add(box_ground()).unwrap();
     let h = w
         .add(BodyDesc::dynamic(Shape::Compound(&dumbbell)).position(Vec3::new(0.0, 1.0, 0.0)))
         .unwrap();
@@ -204,8 +196,7 @@ fn a_compound_rests_on_its_parts() {
 /// A small fast ball (ccd on) fired down at a mesh one triangle thick stops on it.
 #[test]
 fn a_fast_ball_does_not_tunnel_through_a_mesh() {
-    let (v, t) = flat_grid(8, 1.0);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(8, 1.0);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let mut w: Small<'_> = World::new();
     w.add(BodyDesc::fixed(Shape::Mesh(&mesh))).unwrap();
@@ -229,8 +220,7 @@ fn a_fast_ball_does_not_tunnel_through_a_mesh() {
 /// Ray casts and overlap queries reach into meshes and compounds.
 #[test]
 fn queries_reach_into_meshes_and_compounds() {
-    let (v, t) = flat_grid(8, 1.0);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(8, 1.0);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let parts = [
         CompoundPart::new(
@@ -286,8 +276,7 @@ fn queries_reach_into_meshes_and_compounds() {
 /// bit for bit; the convex-shape queries refuse meshes and compounds.
 #[test]
 fn snapshots_carry_mesh_and_compound_worlds() {
-    let (v, t) = flat_grid(12, 0.5);
-    let mut nodes = vec![BvhNode::EMPTY; TriangleMesh::nodes_needed(t.len())];
+    let (v, t, mut nodes) = flat_grid(12, 0.5);
     let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
     let parts = [
         CompoundPart::new(
@@ -372,10 +361,6 @@ fn bodies_on_a_flat_height_field_behave_as_on_one_plane() {
     let (h, at) = flat_field(20, 0.5);
     let field = HeightField::new(&h, 21, 21, 0.5).unwrap();
     let ground = || BodyDesc::fixed(Shape::HeightField(&field)).position(at.position);
-    let box_ground = || {
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(10.0, 0.5, 10.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0))
-    };
     let drop_box = |g: BodyDesc<'_>| {
         let mut w: Small<'_> = World::new();
         w.add(g).unwrap();

@@ -908,35 +908,27 @@ trait Soup {
     fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)>;
 }
 
-impl Soup for TriangleMesh<'_> {
-    fn count(&self) -> u32 {
-        self.triangle_count()
-    }
-    fn tri(&self, i: u32) -> Option<carom::shape::Triangle> {
-        self.triangle(i)
-    }
-    fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32)) {
-        self.query_aabb(aabb, f)
-    }
-    fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)> {
-        self.cast_ray(ray, max_t)
-    }
+/// [`Soup`] for a type with the mesh query methods (`TriangleMesh`, `HeightField`).
+macro_rules! soup {
+    ($t:ty) => {
+        impl Soup for $t {
+            fn count(&self) -> u32 {
+                self.triangle_count()
+            }
+            fn tri(&self, i: u32) -> Option<carom::shape::Triangle> {
+                self.triangle(i)
+            }
+            fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32)) {
+                self.query_aabb(aabb, f)
+            }
+            fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)> {
+                self.cast_ray(ray, max_t)
+            }
+        }
+    };
 }
-
-impl Soup for HeightField<'_> {
-    fn count(&self) -> u32 {
-        self.triangle_count()
-    }
-    fn tri(&self, i: u32) -> Option<carom::shape::Triangle> {
-        self.triangle(i)
-    }
-    fn boxed(&self, aabb: &Aabb, f: &mut dyn FnMut(u32)) {
-        self.query_aabb(aabb, f)
-    }
-    fn ray(&self, ray: &Ray, max_t: f32) -> Option<(u32, carom::shape::RayHit)> {
-        self.cast_ray(ray, max_t)
-    }
-}
+soup!(TriangleMesh<'_>);
+soup!(HeightField<'_>);
 
 /// Box queries against every triangle's box, ray casts against every triangle (nearest,
 /// lowest index on ties): the same triangles and the same bits.
