@@ -182,23 +182,27 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
     let mut current: Option<(u64, usize)> = None;
     let mut missing_total = 0usize;
     for read in 0..len {
-        let Some(&(mut c)) = slots.get(read) else {
+        // Only the key is read here: a contact is copied only when it moves down.
+        let Some((key, sub, a, b)) = slots.get(read).map(|c| (c.key(), c.sub, c.a, c.b)) else {
             break;
         };
         let mut keep = true;
-        if c.sub != 0 {
-            if current.is_none_or(|(k, _)| k != c.key()) {
-                current = listed(&c, bodies, &mut list, &mut dropped).map(|_| (c.key(), 0));
+        if sub != 0 {
+            if current.is_none_or(|(k, _)| k != key) {
+                current = listed(a, b, bodies, &mut list, &mut dropped).map(|_| (key, 0));
             }
-            if c.is_record() {
-                c.new_parts = match current {
+            if sub == RECORD {
+                let missing = match current {
                     Some((_, found)) => list.len().saturating_sub(found) as u32,
                     None => 0,
                 };
-                missing_total += c.new_parts as usize;
+                if let Some(c) = slots.get_mut(read) {
+                    c.new_parts = missing;
+                }
+                missing_total += missing as usize;
                 current = None;
             } else if let Some((_, found)) = current.as_mut() {
-                if list.binary_search(&c.sub).is_ok() {
+                if list.binary_search(&sub).is_ok() {
                     *found += 1;
                 } else {
                     keep = false;
@@ -206,8 +210,12 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
             }
         }
         if keep {
-            if let Some(dst) = slots.get_mut(write) {
-                *dst = c;
+            if read != write {
+                if let Some(&c) = slots.get(read) {
+                    if let Some(dst) = slots.get_mut(write) {
+                        *dst = c;
+                    }
+                }
             }
             write += 1;
         }
@@ -236,16 +244,17 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
     report.dropped_contacts = report.dropped_contacts.saturating_add(dropped);
 }
 
-/// The list of the pair of `c` (a part contact or record) into `list`, or `None` when
-/// the pair is left as it is this step: a body gone, the boxes apart (stage 6 removes
-/// it), or nothing awake.
+/// The list of the pair of slots `a` and `b` (a part contact's or record's) into
+/// `list`, or `None` when the pair is left as it is this step: a body gone, the boxes
+/// apart (stage 6 removes it), or nothing awake.
 fn listed<const N: usize>(
-    c: &Contact,
+    a: u32,
+    b: u32,
     bodies: &Pool<Body<'_>, N>,
     list: &mut HVec<u32, MAX_PAIR_PARTS>,
     dropped: &mut u32,
 ) -> Option<()> {
-    let (a, b) = (bodies.at(c.a as usize)?, bodies.at(c.b as usize)?);
+    let (a, b) = (bodies.at(a as usize)?, bodies.at(b as usize)?);
     if !a.fat.overlaps(&b.fat) || !may_collide(a, b) {
         return None;
     }
@@ -290,7 +299,7 @@ fn add_missing<const N: usize, const C: usize>(
             continue;
         }
         // The same list as pass 1 (nothing changed since).
-        if listed(&c, bodies, list, &mut unused).is_none() {
+        if listed(c.a, c.b, bodies, list, &mut unused).is_none() {
             continue;
         }
         // The pair's part contacts are `slots[first..read]`.
