@@ -522,3 +522,39 @@ fn mesh_pile_run() {
     };
     assert_eq!(run(), run());
 }
+
+/// A pair with parts raises its events once, as a pair: a ball bouncing across several
+/// triangles of a mesh begins touching once per landing and hits once per landing, however
+/// many triangles it touches.
+#[test]
+fn a_pair_with_parts_raises_its_events_once() {
+    let (v, t, mut nodes) = flat_grid(8, 0.25);
+    let mesh = TriangleMesh::build(&v, &t, &mut nodes).unwrap();
+    let mut w: Small<'_> = World::new();
+    let ground = w.add(BodyDesc::fixed(Shape::Mesh(&mesh))).unwrap();
+    // Dropped onto a grid vertex, where six triangles meet.
+    let ball = w
+        .add(BodyDesc::dynamic(Shape::sphere(0.3).unwrap()).position(Vec3::new(0.0, 1.0, 0.0)))
+        .unwrap();
+    let (mut begins, mut ends, mut hits) = (0, 0, 0);
+    for _ in 0..120 {
+        w.step();
+        for e in w.events() {
+            match *e {
+                carom::Event::ContactBegin { a, b } => {
+                    assert_eq!((a, b), (ground, ball));
+                    begins += 1;
+                }
+                carom::Event::ContactEnd { .. } => ends += 1,
+                carom::Event::Hit { a, b, normal, .. } => {
+                    assert_eq!((a, b), (ground, ball));
+                    assert!((normal - Vec3::Y).length() < 1e-3, "{normal:?}");
+                    hits += 1;
+                }
+                _ => {}
+            }
+        }
+    }
+    assert_eq!((begins, ends, hits), (1, 0, 1));
+    assert!(w.body(ball).unwrap().position().y > 0.29);
+}
