@@ -26,9 +26,16 @@ fn terrain() -> &'static carom::shape::HeightField<'static> {
     Box::leak(Box::new(scenes::mesh_pile_field(heights).unwrap()))
 }
 
+/// The reference terrain's two grounds (`terrain`, `terrain_mesh`), leaked likewise.
+fn reference_terrain() -> &'static scenes::TerrainShapes<'static> {
+    let data: &'static mut scenes::TerrainData = Box::leak(Box::default());
+    Box::leak(Box::new(data.shapes().unwrap()))
+}
+
 fn bench_scenes(c: &mut Criterion) {
     let hulls = hulls();
     let terrain = terrain();
+    let reference = reference_terrain();
     let mut group = c.benchmark_group("scene_step");
     group.sample_size(10);
     group.measurement_time(Duration::from_secs(20));
@@ -39,7 +46,10 @@ fn bench_scenes(c: &mut Criterion) {
             ..scene.config()
         };
         template.set_config(cfg).unwrap();
-        scene.build_on(&mut template, hulls, Some(terrain)).unwrap();
+        let ground = reference
+            .ground(scene)
+            .unwrap_or(carom::Shape::HeightField(terrain));
+        scene.build_on(&mut template, hulls, Some(ground)).unwrap();
         let steps = scene.steps();
         group.bench_function(scene.name(), |b| {
             b.iter_custom(|iters| {

@@ -61,8 +61,13 @@ fn line(scene: Scene, sum: u64) -> String {
 
 fn reference_line(scene: Scene) -> String {
     let hulls = reference_hulls();
+    let mut terrain: Box<scenes::TerrainData> = Box::default();
+    let shapes = terrain.shapes().unwrap();
     let mut world: Box<ReferenceWorld<'_>> = Box::new(ReferenceWorld::new());
-    line(scene, scene.run(&mut world, &hulls).unwrap())
+    let sum = scene
+        .run_on(&mut world, &hulls, shapes.ground(scene))
+        .unwrap();
+    line(scene, sum)
 }
 
 /// The mixed scene's snapshot at [`scenes::SNAPSHOT_STEP`].
@@ -155,7 +160,17 @@ fn golden_lines_have_the_documented_format() {
     assert_eq!(n, "narrow 256 0x0000000000000001");
     let golden = std::fs::read_to_string(GOLDEN).unwrap();
     let names: Vec<&str> = golden.lines().filter_map(|l| l.split(' ').next()).collect();
-    assert_eq!(names, ["mixed", "bullets", "tower", "narrow"]);
+    assert_eq!(
+        names,
+        [
+            "mixed",
+            "bullets",
+            "tower",
+            "terrain",
+            "terrain_mesh",
+            "narrow"
+        ]
+    );
     for l in golden.lines() {
         let hex = l.rsplit(' ').next().unwrap();
         assert!(hex.len() == 18 && hex.starts_with("0x"), "{l}");

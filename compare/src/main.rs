@@ -113,7 +113,12 @@ struct Args {
 }
 
 fn usage() -> String {
-    let names: Vec<&str> = Scene::ALL.iter().map(|s| s.name()).collect();
+    // The terrain reference scenes are for determinism only; their ground is not built here.
+    let names: Vec<&str> = Scene::ALL
+        .iter()
+        .filter(|s| !matches!(s, Scene::Terrain | Scene::TerrainMesh))
+        .map(|s| s.name())
+        .collect();
     format!(
         "usage: compare [NAME ...] [--reps N] [--steps N]\n\
          NAME: a scene ({}) or `narrow`; default: {} and narrow\n\
@@ -153,6 +158,7 @@ fn parse_args() -> Result<Args, Fail> {
             name => {
                 named = true;
                 let scene = Scene::from_name(name)
+                    .filter(|s| !matches!(s, Scene::Terrain | Scene::TerrainMesh))
                     .ok_or_else(|| Fail(format!("unknown name `{name}`\n{}", usage())))?;
                 args.scenes.push(scene);
             }
@@ -455,7 +461,7 @@ fn carom_run<'a, const B: usize, const C: usize, const E: usize>(
         sleep_enabled: sleep,
         ..scene.config()
     })?;
-    let watch = scene.build_on(w, hulls, Some(terrain()?))?;
+    let watch = scene.build_on(w, hulls, Some(carom::Shape::HeightField(terrain()?)))?;
     let mut o = Outcome {
         steps,
         watched_start: v3(w.body(watch)?.position()),

@@ -20,14 +20,19 @@ use crate::dynamics::BodyHandle;
 use crate::error::{Error, Input};
 use crate::math::Vec3;
 use crate::rng::SplitMix64;
-use crate::shape::{ConvexHull, HeightField};
+use crate::shape::{ConvexHull, HeightField, Shape};
 use crate::World;
 
 pub mod narrow;
 mod neutral;
 pub mod queries;
+mod terrain;
 
 pub use neutral::{SceneBody, SceneKind, SceneShape};
+pub use terrain::{
+    TerrainData, TerrainShapes, TERRAIN_CELL, TERRAIN_COLUMNS, TERRAIN_NODES, TERRAIN_SAMPLES,
+    TERRAIN_TRIANGLES,
+};
 
 /// The world type the reference scenes run in on every target (capacities are part of
 /// what a golden checksum means: drop rules depend on them). 1024 contact slots: the
@@ -75,11 +80,22 @@ pub enum Scene {
     /// of 10,368 triangles, 300 steps (issue 9's "mesh pile"). Its terrain comes from the
     /// caller: see [`mesh_pile_heights`] and [`Scene::build_on`].
     MeshPile,
+    /// Reference scene: 40 mixed bodies (boxes, spheres, capsules, hulls) dropped into a
+    /// bowl-shaped height field of 512 triangles, where they slide into a pile, 600 steps
+    /// (determinism of the mid phase). Its ground comes from the caller:
+    /// [`TerrainShapes::ground`].
+    Terrain,
+    /// Reference scene: [`Scene::Terrain`] on the same triangles as a [`TriangleMesh`]
+    /// with its hierarchy (`crate::shape::TriangleMesh`), 600 steps.
+    ///
+    /// [`TriangleMesh`]: crate::shape::TriangleMesh
+    TerrainMesh,
 }
 
 impl Scene {
-    /// Every scene, in the order of SCENES.md, then `jolt_pyramid`.
-    pub const ALL: [Scene; 11] = [
+    /// Every scene: those of SCENES.md in its order, then `jolt_pyramid`, `mesh_pile` and
+    /// the two terrain reference scenes.
+    pub const ALL: [Scene; 13] = [
         Scene::Pyramid20,
         Scene::Pyramid100,
         Scene::Boxes,
@@ -91,11 +107,20 @@ impl Scene {
         Scene::Tower,
         Scene::JoltPyramid,
         Scene::MeshPile,
+        Scene::Terrain,
+        Scene::TerrainMesh,
     ];
 
     /// The reference scenes whose checksums after their steps are kept in
     /// `tests/golden/checksums.txt` and checked on every target.
-    pub const REFERENCE: [Scene; 3] = [Scene::Mixed, Scene::Bullets, Scene::Tower];
+    /// `terrain` and `terrain_mesh` need their ground: run them with [`Scene::run_on`].
+    pub const REFERENCE: [Scene; 5] = [
+        Scene::Mixed,
+        Scene::Bullets,
+        Scene::Tower,
+        Scene::Terrain,
+        Scene::TerrainMesh,
+    ];
 
     /// The scene's name in SCENES.md.
     pub fn name(self) -> &'static str {
@@ -111,6 +136,8 @@ impl Scene {
             Scene::Tower => "tower",
             Scene::JoltPyramid => "jolt_pyramid",
             Scene::MeshPile => "mesh_pile",
+            Scene::Terrain => "terrain",
+            Scene::TerrainMesh => "terrain_mesh",
         }
     }
 
@@ -126,6 +153,7 @@ impl Scene {
             Scene::Pyramid100 => 200,
             Scene::Boxes | Scene::Spheres | Scene::Hulls | Scene::MeshPile => 300,
             Scene::Bullet => 60,
+            Scene::Terrain | Scene::TerrainMesh => 600,
             Scene::Mixed | Scene::Bullets | Scene::Tower => 1000,
         }
     }
@@ -144,6 +172,7 @@ impl Scene {
             Scene::Tower => 11,
             Scene::JoltPyramid => 1 + JOLT_PYRAMID_BOXES,
             Scene::MeshPile => 1 + MESH_PILE_BODIES,
+            Scene::Terrain | Scene::TerrainMesh => 1 + TERRAIN_BODIES,
         }
     }
 
@@ -154,6 +183,7 @@ impl Scene {
             Scene::Pyramid20 => pyramid_top(20),
             Scene::Pyramid100 => pyramid_top(100),
             Scene::Boxes | Scene::Hulls | Scene::Bullet | Scene::MeshPile => 1,
+            Scene::Terrain | Scene::TerrainMesh => 1,
             Scene::Spheres | Scene::Mixed => 5,
             Scene::Bullets => 6,
             Scene::Tower => 10,
@@ -185,6 +215,7 @@ impl Scene {
             Scene::Tower => tower_bodies(10, f),
             Scene::JoltPyramid => jolt_pyramid_bodies(f),
             Scene::MeshPile => mesh_pile_bodies(hulls_len, f),
+            Scene::Terrain | Scene::TerrainMesh => terrain_bodies(hulls_len, f),
         }
     }
 
@@ -200,14 +231,15 @@ impl Scene {
         self.build_on(world, hulls, None)
     }
 
-    /// [`Scene::build`], with the terrain [`SceneShape::Terrain`] stands for (`mesh_pile`
-    /// needs it: `None` there is `Error::OutOfRange(Input::Config)`; the other scenes
-    /// ignore it). Build it with [`mesh_pile_field`].
+    /// [`Scene::build`], with the ground [`SceneShape::Terrain`] stands for (`mesh_pile`,
+    /// `terrain` and `terrain_mesh` need it: `None` there is
+    /// `Error::OutOfRange(Input::Config)`; the other scenes ignore it). Build it with
+    /// [`mesh_pile_field`] or [`TerrainShapes::ground`].
     pub fn build_on<'a, const B: usize, const C: usize, const E: usize>(
         self,
         world: &mut World<'a, B, C, E>,
         hulls: &'a [ConvexHull],
-        terrain: Option<&'a HeightField<'a>>,
+        terrain: Option<Shape<'a>>,
     ) -> Result<BodyHandle, Error> {
         add_bodies(world, hulls, terrain, self.watched(), |f| {
             self.for_each_body(hulls.len(), f)
@@ -231,8 +263,19 @@ impl Scene {
         world: &mut World<'a, B, C, E>,
         hulls: &'a [ConvexHull],
     ) -> Result<u64, Error> {
+        self.run_on(world, hulls, None)
+    }
+
+    /// [`Scene::run`] with the ground of [`Scene::build_on`]: the scenes with a terrain
+    /// (for the reference ones, [`TerrainShapes::ground`]) run only through here.
+    pub fn run_on<'a, const B: usize, const C: usize, const E: usize>(
+        self,
+        world: &mut World<'a, B, C, E>,
+        hulls: &'a [ConvexHull],
+        terrain: Option<Shape<'a>>,
+    ) -> Result<u64, Error> {
         world.set_config(self.config())?;
-        self.build(world, hulls)?;
+        self.build_on(world, hulls, terrain)?;
         for _ in 0..self.steps() {
             world.step();
         }
@@ -289,7 +332,7 @@ type Sink<'f, E> = &'f mut dyn FnMut(&SceneBody) -> Result<(), E>;
 fn add_bodies<'a, const B: usize, const C: usize, const E: usize>(
     world: &mut World<'a, B, C, E>,
     hulls: &'a [ConvexHull],
-    terrain: Option<&'a HeightField<'a>>,
+    terrain: Option<Shape<'a>>,
     watch: usize,
     each: impl FnOnce(Sink<'_, Error>) -> Result<(), Error>,
 ) -> Result<BodyHandle, Error> {
@@ -722,7 +765,7 @@ pub const MESH_PILE_BODIES: usize = 300;
 
 /// `|2 frac(x) − 1|` for `x ≥ 0`: a triangle wave of period 1 between 0 and 1, by
 /// integer truncation (the same bits everywhere).
-fn triangle_wave(x: f32) -> f32 {
+pub(crate) fn triangle_wave(x: f32) -> f32 {
     let frac = x - (x as u32) as f32;
     let t = 2.0 * frac - 1.0;
     if t < 0.0 {
@@ -770,25 +813,63 @@ fn mesh_pile_bodies<E: From<Error>>(hulls_len: usize, f: Sink<'_, E>) -> Result<
     let mut rng = SplitMix64::new(SEED ^ 0x3E54);
     for n in 0..MESH_PILE_BODIES {
         let (x, z, y) = (n % 10, (n / 10) % 10, n / 100);
-        let s = rng.range(0.7, 1.3);
-        let shape = match n % 4 {
-            0 => cuboid(0.4 * s, 0.3 * s, 0.35 * s),
-            1 => SceneShape::Sphere { radius: 0.35 * s },
-            2 => SceneShape::Capsule {
-                half_height: 0.3 * s,
-                radius: 0.25 * s,
-            },
-            _ => SceneShape::Hull(n % hulls_len),
-        };
-        let p = Vec3::new(
-            (x as f32 - 4.5) * 2.0 + rng.range(-0.3, 0.3),
+        let centre = Vec3::new(
+            (x as f32 - 4.5) * 2.0,
             4.5 + y as f32 * 1.5,
-            (z as f32 - 4.5) * 2.0 + rng.range(-0.3, 0.3),
+            (z as f32 - 4.5) * 2.0,
         );
-        let mut body = SceneBody::dynamic(shape).at(p);
-        body.rotation = rng.rotation();
-        body.velocity = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
-        f(&body)?;
+        f(&mixed_body(n, hulls_len, centre, &mut rng))?;
+    }
+    Ok(())
+}
+
+/// Dynamic body `n` of a mixed drop (`mesh_pile`, `terrain`): a box, a sphere, a capsule
+/// or a hull in turn (hull `n % hulls_len`, `hulls_len ≥ 1`), scaled by 0.7–1.3, within
+/// ±0.3 m of `centre` in x and z, turned and moving sideways at random (from `rng`).
+fn mixed_body(n: usize, hulls_len: usize, centre: Vec3, rng: &mut SplitMix64) -> SceneBody {
+    let s = rng.range(0.7, 1.3);
+    let shape = match n % 4 {
+        0 => cuboid(0.4 * s, 0.3 * s, 0.35 * s),
+        1 => SceneShape::Sphere { radius: 0.35 * s },
+        2 => SceneShape::Capsule {
+            half_height: 0.3 * s,
+            radius: 0.25 * s,
+        },
+        _ => SceneShape::Hull(n.checked_rem(hulls_len).unwrap_or(0)),
+    };
+    let p = Vec3::new(
+        centre.x + rng.range(-0.3, 0.3),
+        centre.y,
+        centre.z + rng.range(-0.3, 0.3),
+    );
+    let mut body = SceneBody::dynamic(shape).at(p);
+    body.rotation = rng.rotation();
+    body.velocity = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0));
+    body
+}
+
+/// Dynamic bodies of `terrain` and `terrain_mesh`.
+pub const TERRAIN_BODIES: usize = 40;
+
+/// `terrain` / `terrain_mesh`: the ground ([`TerrainShapes`], its corner at
+/// `(−8, 0, −8)`, centred on the origin), then 40 mixed bodies ([`mixed_body`]) in a
+/// 4 × 5 × 2 grid 1.6 m apart, 4 m up and 1.5 m between layers, over the bowl's middle.
+/// Needs a hull (`hulls_len ≥ 1`).
+fn terrain_bodies<E: From<Error>>(hulls_len: usize, f: Sink<'_, E>) -> Result<(), E> {
+    if hulls_len == 0 {
+        return Err(Error::OutOfRange(Input::Config).into());
+    }
+    let half = (TERRAIN_COLUMNS - 1) as f32 * TERRAIN_CELL * 0.5;
+    f(&SceneBody::fixed(SceneShape::Terrain).at(Vec3::new(-half, 0.0, -half)))?;
+    let mut rng = SplitMix64::new(SEED ^ 0x7E22);
+    for n in 0..TERRAIN_BODIES {
+        let (x, z, y) = (n % 4, (n / 4) % 5, n / 20);
+        let centre = Vec3::new(
+            (x as f32 - 1.5) * 1.6,
+            4.0 + y as f32 * 1.5,
+            (z as f32 - 2.0) * 1.6,
+        );
+        f(&mixed_body(n, hulls_len, centre, &mut rng))?;
     }
     Ok(())
 }
@@ -823,7 +904,13 @@ mod tests {
 
     #[test]
     fn hull_scenes_need_a_hull_and_stay_below_the_count_given() {
-        for scene in [Scene::Hulls, Scene::Mixed, Scene::MeshPile] {
+        for scene in [
+            Scene::Hulls,
+            Scene::Mixed,
+            Scene::MeshPile,
+            Scene::Terrain,
+            Scene::TerrainMesh,
+        ] {
             let r: Result<(), Error> = scene.for_each_body(0, |_| Ok(()));
             assert_eq!(r, Err(Error::OutOfRange(Input::Config)));
             let r: Result<(), Error> = scene.for_each_body(3, |b| match b.shape {

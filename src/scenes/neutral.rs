@@ -6,7 +6,7 @@
 use crate::dynamics::body::{BodyDesc, Material};
 use crate::error::{Error, Input};
 use crate::math::{Quat, Vec3};
-use crate::shape::{ConvexHull, HeightField, Shape};
+use crate::shape::{ConvexHull, Shape};
 
 /// The collision shape of a [`SceneBody`], in the body's frame (centred on its origin).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,10 +33,12 @@ pub enum SceneShape {
     /// the `hulls_len` given to [`super::Scene::for_each_body`]). Another engine should
     /// build its hull from that hull's [`ConvexHull::vertices`], so both see one polytope.
     Hull(usize),
-    /// The `mesh_pile` terrain: the height field of [`super::mesh_pile_heights`] with
-    /// [`super::MESH_PILE_COLUMNS`] samples a side, [`super::MESH_PILE_CELL`] apart, its
-    /// corner at the body's position. Another engine builds it from the same heights (as
-    /// a triangle mesh of the same triangles: [`crate::shape::HeightField::triangle`]).
+    /// The scene's ground, supplied by the caller ([`super::Scene::build_on`]): in
+    /// `mesh_pile`, the height field of [`super::mesh_pile_heights`] with
+    /// [`super::MESH_PILE_COLUMNS`] samples a side, [`super::MESH_PILE_CELL`] apart; in
+    /// `terrain` and `terrain_mesh`, [`super::TerrainShapes`]. Its corner is at the
+    /// body's position. Another engine builds it from the same heights (as a triangle
+    /// mesh of the same triangles: [`crate::shape::HeightField::triangle`]).
     Terrain,
 }
 
@@ -146,12 +148,10 @@ impl SceneBody {
     pub fn shape_on<'a>(
         &self,
         hulls: &'a [ConvexHull],
-        terrain: Option<&'a HeightField<'a>>,
+        terrain: Option<Shape<'a>>,
     ) -> Result<Shape<'a>, Error> {
         match self.shape {
-            SceneShape::Terrain => terrain
-                .map(Shape::HeightField)
-                .ok_or(Error::OutOfRange(Input::Config)),
+            SceneShape::Terrain => terrain.ok_or(Error::OutOfRange(Input::Config)),
             SceneShape::Sphere { radius } => Shape::sphere(radius),
             SceneShape::Capsule {
                 half_height,
@@ -176,7 +176,7 @@ impl SceneBody {
     pub fn desc_on<'a>(
         &self,
         hulls: &'a [ConvexHull],
-        terrain: Option<&'a HeightField<'a>>,
+        terrain: Option<Shape<'a>>,
     ) -> Result<BodyDesc<'a>, Error> {
         let shape = self.shape_on(hulls, terrain)?;
         let desc = match self.kind {

@@ -15,16 +15,21 @@
 //! mixed 1000 0x…      the reference scenes (Scene::REFERENCE), each in a fresh world
 //! bullets 1000 0x…
 //! tower 1000 0x…
+//! terrain 600 0x…
+//! terrain_mesh 600 0x…
 //! narrow 256 0x…      the narrow-phase workload (carom::scenes::narrow)
 //! restored mixed 1000 0x…
 //! stack <n> bytes
 //! ticks mixed 1000 steps total <t> max <m>
 //! ticks bullets 1000 steps total <t> max <m>
 //! ticks tower 1000 steps total <t> max <m>
+//! ticks terrain 600 steps total <t> max <m>
+//! ticks terrain_mesh 600 steps total <t> max <m>
 //! ```
 //!
-//! Memory: the world (`ReferenceWorld`, about 1.1 MB) and its hulls (about 28 KB) live in
-//! `.bss` statics handed out once by `cortex_m::singleton!`; nothing large is on the stack.
+//! Memory: the world (`ReferenceWorld`, about 1.1 MB), its hulls (about 28 KB) and the
+//! terrain scenes' ground (`TerrainData`, about 50 KB) live in `.bss` statics handed out
+//! once by `cortex_m::singleton!`; nothing large is on the stack.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
@@ -32,7 +37,9 @@
 mod stack;
 mod ticks;
 
-use carom::scenes::{self, ReferenceWorld, Scene, REFERENCE_HULLS, SEED};
+use carom::scenes::{
+    self, ReferenceWorld, Scene, TerrainData, TerrainShapes, REFERENCE_HULLS, SEED,
+};
 use carom::{ConvexHull, Vec3};
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
@@ -101,6 +108,7 @@ fn main() -> ! {
 /// Print the golden lines and the restored line; time each reference scene's steps.
 fn run(step_ticks: &mut [StepTicks; Scene::REFERENCE.len()]) -> Result<(), Failure> {
     let hulls = reference_hulls()?;
+    let terrain = reference_terrain()?;
     let world: &'static mut ReferenceWorld<'static> =
         cortex_m::singleton!(: ReferenceWorld<'static> = ReferenceWorld::new())
             .ok_or(Failure::StaticTaken)?;
@@ -110,7 +118,7 @@ fn run(step_ticks: &mut [StepTicks; Scene::REFERENCE.len()]) -> Result<(), Failu
         *world = ReferenceWorld::new();
         // What Scene::run does, with each step timed.
         world.set_config(scene.config())?;
-        scene.build(world, hulls)?;
+        scene.build_on(world, hulls, terrain.ground(scene))?;
         for _ in 0..scene.steps() {
             let start = ticks.now();
             world.step();
@@ -144,4 +152,15 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     debug::exit(debug::EXIT_FAILURE);
     #[allow(clippy::empty_loop)]
     loop {}
+}
+
+/// The terrain scenes' ground ([`TerrainData::shapes`]), in statics so the world can
+/// borrow it for `'static`.
+fn reference_terrain() -> Result<&'static TerrainShapes<'static>, Failure> {
+    let data: &'static mut TerrainData =
+        cortex_m::singleton!(: TerrainData = TerrainData::EMPTY).ok_or(Failure::StaticTaken)?;
+    let shapes = data.shapes()?;
+    let shapes: &'static TerrainShapes<'static> =
+        cortex_m::singleton!(: TerrainShapes<'static> = shapes).ok_or(Failure::StaticTaken)?;
+    Ok(shapes)
 }

@@ -29,11 +29,15 @@ fn run() -> Result<(), carom::Error> {
     let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
     let mut hulls = vec![placeholder; REFERENCE_HULLS];
     scenes::make_hulls(&mut hulls, SEED)?;
+    // The ground of `terrain` (height field) and `terrain_mesh` (the same triangles as a
+    // mesh), about 50 KB.
+    let mut terrain: Box<scenes::TerrainData> = Box::default();
+    let terrain = terrain.shapes()?;
     // About 1.1 MB: on the heap, not on wasm's 1 MiB stack.
     let mut world: Box<ReferenceWorld<'_>> = Box::default();
     for scene in Scene::REFERENCE {
         *world = ReferenceWorld::new();
-        let checksum = scene.run(&mut world, &hulls)?;
+        let checksum = scene.run_on(&mut world, &hulls, terrain.ground(scene))?;
         println!("{}", scene.line(checksum));
     }
     println!("{}", scenes::narrow::run());

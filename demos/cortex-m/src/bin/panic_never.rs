@@ -18,7 +18,7 @@
 
 use carom::collide::{contact, distance, intersects, penetration, SimplexCache};
 use carom::collide::{movement_bounds, segment_closest_points, time_of_impact, Motion, Toi};
-use carom::scenes::{self, Scene};
+use carom::scenes::{self, Scene, TerrainData, TerrainShapes};
 use carom::shape::{BvhNode, Compound, CompoundPart, HeightField, TriangleMesh};
 use carom::{
     BodyDesc, ConvexHull, Iso, Material, Quat, QueryFilter, Ray, RayCastHit, Shape, StepTrace,
@@ -229,15 +229,22 @@ fn world(w: &mut W, shapes: &[Shape<'static>], hulls: &'static [ConvexHull]) -> 
 }
 
 /// The standard scenes: built into a world too small for most of them (the pool-full
-/// error paths), and the smallest run.
+/// error paths; the terrain scenes on their ground), and the smallest run.
 fn scene_doors(w: &mut W, hulls: &'static [ConvexHull]) -> u32 {
     let mut acc = 0u32;
+    let terrain = match cortex_m::singleton!(: TerrainData = TerrainData::EMPTY) {
+        Some(data) => data.shapes().ok(),
+        None => None,
+    };
+    let terrain: Option<&'static TerrainShapes<'static>> =
+        terrain.and_then(|t| cortex_m::singleton!(: TerrainShapes<'static> = t).map(|t| &*t));
     for scene in Scene::ALL {
         let scene = black_box(scene);
         acc += scene.name().len() as u32 + scene.steps() + scene.body_count() as u32;
         acc += Scene::from_name(scene.name()).is_some() as u32;
         *w = W::new();
-        if scene.build(w, hulls).is_ok() {
+        let ground = terrain.and_then(|t| t.ground(scene));
+        if scene.build_on(w, hulls, ground).is_ok() {
             w.step();
             acc += scene.line(w.checksum()).checksum as u32;
         }
