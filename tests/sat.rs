@@ -66,6 +66,80 @@ fn pairs<'h>(hulls: &'h [ConvexHull]) -> Vec<(&'static str, Shape<'h>, Shape<'h>
             out.push(("hull_box", hull(q.hull_a), cube, q));
         }
     }
+    out.extend(triangle_pairs(hulls));
+    out
+}
+
+/// Mesh triangles (0.3 to 2 m, their vertices up to 30 m from their mesh's origin, as a
+/// height field's far cells are) against the benchmark box, hulls and ball placed near a point
+/// of the triangle or a little beyond its edges, half of them from 0.6 m below its plane to 0.8 m
+/// above, half near touching (0.35 to 0.95 m above), at random rotations; both orders, 1024 pairs.
+fn triangle_pairs<'h>(
+    hulls: &'h [ConvexHull],
+) -> Vec<(&'static str, Shape<'h>, Shape<'h>, PoseQuery)> {
+    let cube = Shape::cuboid(Vec3::splat(BOX_HALF)).unwrap();
+    let mut rng = SplitMix64::new(0x07A1_A9E5);
+    let mut out = Vec::new();
+    while out.len() < 1024 {
+        let k = out.len();
+        let o = Vec3::new(
+            rng.range(0.0, 30.0),
+            rng.range(0.0, 2.0),
+            rng.range(0.0, 30.0),
+        );
+        let (u, w) = (rng.unit_vector(), rng.unit_vector());
+        if u.cross(w).length() < 0.3 {
+            continue;
+        }
+        let (v1, v2) = (o + u * rng.range(0.3, 2.0), o + w * rng.range(0.3, 2.0));
+        let Ok(tri) = Shape::triangle(o, v1, v2) else {
+            continue;
+        };
+        let Shape::Triangle(t) = tri else { continue };
+        let centroid = ((o + v1) + v2) * (1.0 / 3.0);
+        let turn = if k % 3 == 0 {
+            Quat::IDENTITY
+        } else {
+            rng.rotation()
+        };
+        let pose_t = Iso::new(turn.rotate(-centroid), turn);
+        // A point of the plane near the triangle: barycentric weights a little past 0..1.
+        let (b1, b2) = (rng.range(-0.2, 1.0), rng.range(-0.2, 1.0));
+        let (b1, b2) = if b1 + b2 > 1.2 {
+            (1.2 - b2, 1.2 - b1)
+        } else {
+            (b1, b2)
+        };
+        let local = o + (v1 - o) * b1 + (v2 - o) * b2;
+        let up = turn.rotate(t.normal());
+        let lift = if k % 8 < 4 {
+            rng.range(0.35, 0.95)
+        } else {
+            rng.range(-0.6, 0.8)
+        };
+        let at = pose_t.transform_point(local) + up * lift;
+        let pose_o = Iso::new(at, rng.rotation());
+        let hull_index = (k % hulls.len()) as u8;
+        let other = match k % 6 {
+            0 | 1 => cube,
+            2 | 3 => Shape::hull(&hulls[usize::from(hull_index)]),
+            _ => Shape::sphere(BALL_RADIUS).unwrap(),
+        };
+        let q = |pose_a, pose_b| PoseQuery {
+            pose_a,
+            pose_b,
+            hull_a: hull_index,
+            hull_b: hull_index,
+        };
+        out.push(match k % 6 {
+            0 => ("box_tri", other, tri, q(pose_o, pose_t)),
+            1 => ("tri_box", tri, other, q(pose_t, pose_o)),
+            2 => ("hull_tri", other, tri, q(pose_o, pose_t)),
+            3 => ("tri_hull", tri, other, q(pose_t, pose_o)),
+            4 => ("ball_tri", other, tri, q(pose_o, pose_t)),
+            _ => ("tri_ball", tri, other, q(pose_t, pose_o)),
+        });
+    }
     out
 }
 
@@ -97,6 +171,12 @@ fn plane_distance(s: &Shape, p: Vec3) -> f32 {
             let y = p.y.clamp(-c.half_height, c.half_height);
             (p - Vec3::new(0.0, y, 0.0)).length() - c.radius
         }
+        // Off the triangle's plane, either side (the triangle has no inside); scaled to
+        // the 1 m shapes of the other sets, its coordinates reaching 32 m.
+        Shape::Triangle(t) => {
+            let n = t.normal();
+            (n.dot(p) - n.dot(t.vertices[0])).abs() / 32.0
+        }
         _ => 0.0,
     }
 }
@@ -123,6 +203,10 @@ fn bias(a: &Shape, b: &Shape, q: &PoseQuery) -> f32 {
     let extent = |s: &Shape| match s {
         Shape::Cuboid(c) => c.half_extents.max_elem(),
         Shape::Hull(h) => h.tolerance() / ConvexHull::TOLERANCE,
+        Shape::Triangle(t) => {
+            let [u, v, w] = t.vertices;
+            u.abs().max(v.abs()).max(w.abs()).max_elem()
+        }
         _ => 0.0,
     };
     let t = q.pose_a.inv_mul(&q.pose_b).position;
@@ -133,7 +217,7 @@ fn bias(a: &Shape, b: &Shape, q: &PoseQuery) -> f32 {
 /// be: its face was preferred to a slightly shallower edge pair
 /// (`carom::collide::EDGE_DEPTH_PREFERENCE`).
 fn preference(a: &Shape, b: &Shape, s: f32) -> f32 {
-    let polytope = |x: &Shape| matches!(x, Shape::Cuboid(_) | Shape::Hull(_));
+    let polytope = |x: &Shape| matches!(x, Shape::Cuboid(_) | Shape::Hull(_) | Shape::Triangle(_));
     if polytope(a) && polytope(b) && s < 0.0 {
         FACE_PREFERENCE_DEPTH * -s
     } else {

@@ -1,11 +1,14 @@
-//! Closed forms: sphere, capsule and half-space pairs, sphere against box. They also serve
+//! Closed forms: sphere, capsule and half-space pairs, sphere against box and against a
+//! triangle. They also serve
 //! as test oracles.
 
 use super::manifold::{
     Candidate, ContactId, LocalManifold, Manifold, ManifoldPoint, MAX_MANIFOLD_POINTS,
 };
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::{Capsule, Cuboid, FeatureId, HalfSpace, Shape, Sphere, MAX_HULL_VERTICES};
+use crate::shape::{
+    Capsule, Cuboid, FeatureId, HalfSpace, Shape, Sphere, Triangle, MAX_HULL_VERTICES,
+};
 
 /// Closest points between segments `p1–q1` and `p2–q2`: returns `(s, t)` with the points
 /// `p1 + s (q1 − p1)` and `p2 + t (q2 − p2)`, `s, t ∈ [0, 1]`. Degenerate segments
@@ -259,6 +262,131 @@ pub(crate) fn sphere_cuboid(
     out.points[0] = point;
     out.len = 1;
     true
+}
+
+/// Sphere `a` against triangle `b` (a mesh or height-field part), world frame in and out,
+/// the normal from the sphere towards the triangle. In the triangle's frame the centre
+/// `p` has a closest point `q` on the triangle, found by the Voronoi regions of its
+/// vertices, edges and face (Ericson, *Real-Time Collision Detection*, 5.1.5):
+///
+/// - over the face: `q` is `p` projected on the plane, the normal is the face normal
+///   (front `n` or back `−n`, whichever side `p` is on; front when on the plane), the
+///   separation `|n·(p − v₀)| − r`, the feature the face (0 front, 1 back, as the
+///   triangle's supporting face numbers them);
+/// - beyond an edge or a vertex: the normal is `(q − p) / |q − p|`, the separation
+///   `|q − p| − r`, the feature that edge (`v_i → v_{i+1}`) or vertex. A centre exactly on
+///   the edge or vertex takes the face normal of its side.
+///
+/// One point: the sphere's surface point along the normal and `q`. False when apart by
+/// more than `margin` or when a number is not finite.
+pub(crate) fn sphere_triangle(
+    a: &Sphere,
+    pose_a: &Iso,
+    b: &Triangle,
+    pose_b: &Iso,
+    margin: f32,
+    out: &mut Manifold,
+) -> bool {
+    let p = pose_b.inverse_transform_point(pose_a.position);
+    let n = b.normal();
+    let (q, feature) = closest_on_triangle(b, p);
+    let height = n.dot(p - b.vertices[0]);
+    let face_side = if height >= 0.0 {
+        (n, FeatureId::face(0))
+    } else {
+        (-n, FeatureId::face(1))
+    };
+    // Triangle frame: `outward` from the triangle towards the centre.
+    let (outward, gap, feature) = match feature {
+        None => (face_side.0, scalar::abs(height), face_side.1),
+        Some(f) => match (p - q).normalize_and_length() {
+            Some((outward, gap)) => (outward, gap, f),
+            None => (face_side.0, 0.0, f),
+        },
+    };
+    let separation = gap - a.radius;
+    let within = separation <= margin; // false for NaN too
+    if !within {
+        return false;
+    }
+    let on_triangle = match feature.kind() {
+        crate::shape::FeatureKind::Face => p - n * height,
+        _ => q,
+    };
+    let normal = pose_b.transform_vector(-outward);
+    let on_sphere = normal * a.radius;
+    let point = ManifoldPoint {
+        point_a: pose_a.position + on_sphere,
+        point_b: pose_b.transform_point(on_triangle),
+        local_a: pose_a.inverse_transform_vector(on_sphere),
+        local_b: on_triangle,
+        separation,
+        id: ContactId {
+            a: FeatureId::vertex(0),
+            b: feature,
+        },
+    };
+    let finite = normal.is_finite()
+        && point.point_a.is_finite()
+        && point.point_b.is_finite()
+        && point.local_a.is_finite()
+        && separation.is_finite();
+    if !finite {
+        return false;
+    }
+    out.normal = normal;
+    out.points[0] = point;
+    out.len = 1;
+    true
+}
+
+/// The point of triangle `t` closest to `p` and, when it lies on an edge or a vertex,
+/// that feature (`None`: inside the face). Ericson's region tests, in his order; `q` on
+/// the face is left to the caller (the plane projection is more exact).
+fn closest_on_triangle(t: &Triangle, p: Vec3) -> (Vec3, Option<FeatureId>) {
+    let [a, b, c] = t.vertices;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Some(FeatureId::vertex(0)));
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Some(FeatureId::vertex(1)));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return (a + ab * fraction(d1, d1 - d3), Some(FeatureId::edge(0, 1)));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Some(FeatureId::vertex(2)));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return (a + ac * fraction(d2, d2 - d6), Some(FeatureId::edge(2, 0)));
+    }
+    let va = d3 * d6 - d5 * d4;
+    let (e, f) = (d4 - d3, d5 - d6);
+    if va <= 0.0 && e >= 0.0 && f >= 0.0 {
+        return (
+            b + (c - b) * fraction(e, e + f),
+            Some(FeatureId::edge(1, 2)),
+        );
+    }
+    (p, None)
+}
+
+/// `num / den` clamped to `[0, 1]`, 0 when `den` is not positive (a degenerate region).
+#[inline]
+fn fraction(num: f32, den: f32) -> f32 {
+    if den > 0.0 {
+        scalar::clamp(num / den, 0.0, 1.0)
+    } else {
+        0.0
+    }
 }
 
 /// The box feature under a point `p` outside the box `|x| <= h` (box frame): the face,

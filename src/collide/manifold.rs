@@ -30,7 +30,7 @@ use super::check_pose;
 use super::clip::{self, MAX_CLIP_POINTS};
 use super::epa;
 use super::gjk::{self, GjkStatus, SimplexCache, MAX_GJK_ITERATIONS};
-use super::sat::{self, PairCache, SatOutcome, SAT_TOLERANCE};
+use super::sat::{self, PairCache, SatOutcome, TrianglePolytope, SAT_TOLERANCE};
 use super::Proxy;
 use crate::error::{non_negative, Error, Input};
 use crate::math::{scalar, Iso, Vec3};
@@ -441,6 +441,13 @@ fn contact_ordered(
         let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
         return analytic::sphere_cuboid(s, &pose_a, c, &pose_b, margin, out);
     }
+    if let (Shape::Sphere(s), Shape::Triangle(t), Route::Fast(cache)) = (a, b, &mut route) {
+        // Closed form in the triangle's frame, like the box's.
+        **cache = PairCache::default();
+        let pose_a = Iso::new(pose_a.position, unit_a);
+        let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
+        return analytic::sphere_triangle(s, &pose_a, t, &pose_b, margin, out);
+    }
     let (unit_pose_a, b_in_a) = relative(pose_a, unit_a, pose_b);
     let mut local = LocalManifold::new(Vec3::Y);
     let outcome = match route {
@@ -619,6 +626,19 @@ fn fast_path(
         }
         (Shape::Hull(ha), Shape::Hull(hb)) if closed(ha) && closed(hb) => {
             sat::polytopes(*ha, *hb, b_in_a, margin, cache, out)
+        }
+        // A triangle (a mesh or height-field part) against a box or a hull.
+        (Shape::Cuboid(ca), Shape::Triangle(tb)) => {
+            sat::polytopes(ca, &TrianglePolytope::new(tb), b_in_a, margin, cache, out)
+        }
+        (Shape::Triangle(ta), Shape::Cuboid(cb)) => {
+            sat::polytopes(&TrianglePolytope::new(ta), cb, b_in_a, margin, cache, out)
+        }
+        (Shape::Hull(ha), Shape::Triangle(tb)) if closed(ha) => {
+            sat::polytopes(*ha, &TrianglePolytope::new(tb), b_in_a, margin, cache, out)
+        }
+        (Shape::Triangle(ta), Shape::Hull(hb)) if closed(hb) => {
+            sat::polytopes(&TrianglePolytope::new(ta), *hb, b_in_a, margin, cache, out)
         }
         _ => {
             *cache = PairCache::default();

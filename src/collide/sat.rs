@@ -104,7 +104,9 @@ use super::clip;
 use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold};
 use crate::math::{scalar, Iso, Mat3, Vec3};
 use crate::shape::EDGE_TILT_SIN;
-use crate::shape::{Capsule, ConvexHull, Cuboid, Face, FeatureId, MAX_HULL_EDGES, MAX_HULL_FACES};
+use crate::shape::{
+    Capsule, ConvexHull, Cuboid, Face, FeatureId, Triangle, MAX_HULL_EDGES, MAX_HULL_FACES,
+};
 
 /// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
 /// [`super::contact`]): one shape's best face must separate more than the other's (within
@@ -307,6 +309,8 @@ pub(crate) enum Geometry<'h> {
     Cuboid(Vec3),
     /// A hull's vertices.
     Hull(&'h [Vec3]),
+    /// A triangle's vertices.
+    Triangle(&'h [Vec3; 3]),
 }
 
 impl Geometry<'_> {
@@ -317,20 +321,26 @@ impl Geometry<'_> {
                 .then(u.y.total_cmp(&v.y))
                 .then(u.z.total_cmp(&v.z))
         };
+        let points = |p: &[Vec3], q: &[Vec3]| {
+            let mut o = p.len().cmp(&q.len());
+            for (u, v) in p.iter().zip(q.iter()) {
+                if o != Ordering::Equal {
+                    break;
+                }
+                o = vec(u, v);
+            }
+            o
+        };
+        let kind = |g: &Geometry| match g {
+            Geometry::Cuboid(_) => 0u8,
+            Geometry::Hull(_) => 1,
+            Geometry::Triangle(_) => 2,
+        };
         match (self, other) {
             (Geometry::Cuboid(x), Geometry::Cuboid(y)) => vec(x, y),
-            (Geometry::Cuboid(_), Geometry::Hull(_)) => Ordering::Less,
-            (Geometry::Hull(_), Geometry::Cuboid(_)) => Ordering::Greater,
-            (Geometry::Hull(p), Geometry::Hull(q)) => {
-                let mut o = p.len().cmp(&q.len());
-                for (u, v) in p.iter().zip(q.iter()) {
-                    if o != Ordering::Equal {
-                        break;
-                    }
-                    o = vec(u, v);
-                }
-                o
-            }
+            (Geometry::Hull(p), Geometry::Hull(q)) => points(p, q),
+            (Geometry::Triangle(p), Geometry::Triangle(q)) => points(&p[..], &q[..]),
+            _ => kind(self).cmp(&kind(other)),
         }
     }
 }
@@ -534,6 +544,153 @@ impl Polytope for ConvexHull {
     }
     fn geometry(&self) -> Geometry<'_> {
         Geometry::Hull(self.vertices())
+    }
+}
+
+/// A triangle as the separating axis test sees it: a flat polytope with five faces (the
+/// front, index 0, and back, index 1, as [`Triangle::supporting_face`] numbers them, then
+/// a side face `2 + i` through edge `i`, from vertex `i` to `i + 1`, along its outward
+/// in-plane normal) and six edges.
+///
+/// A flat polygon's edge maps to half a great circle on the Gauss map, from the front
+/// normal `n` through the edge's outward normal `m` to `−n`: its end points are opposite,
+/// so the arc test of the edge pairs cannot tell it from any other half circle. Each
+/// triangle edge is therefore two edges of the test, `2i` from `n` to `m` (faces front and
+/// side) and `2i + 1` from `m` to `−n` (side and back), each a quarter circle, with the
+/// same end points and feature ids. The side faces are true separating axes (the edge is
+/// the triangle's support along `m`) but have no polygon: a side face chosen as the
+/// reference makes the clipping find nothing, and the caller falls back to the general
+/// path. There is no ball inside a triangle ([`Polytope::inner_radius`] is 0), so the
+/// edge pairs are never pruned; 6 × 12 of them against a box cost little.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct TrianglePolytope {
+    vertices: [Vec3; 3],
+    /// Front unit normal, [`Triangle::normal`].
+    normal: Vec3,
+    /// Outward unit normal of each edge in the triangle's plane.
+    sides: [Vec3; 3],
+}
+
+impl TrianglePolytope {
+    pub(crate) fn new(t: &Triangle) -> TrianglePolytope {
+        let normal = t.normal();
+        let v = t.vertices;
+        let side = |i: usize| {
+            let (p, q) = (v[i], v[(i + 1) % 3]);
+            (q - p).cross(normal).normalize_or(Vec3::ZERO)
+        };
+        TrianglePolytope {
+            vertices: v,
+            normal,
+            sides: [side(0), side(1), side(2)],
+        }
+    }
+
+    fn triangle(&self) -> Triangle {
+        Triangle {
+            vertices: self.vertices,
+        }
+    }
+}
+
+impl Polytope for TrianglePolytope {
+    fn has_well_formed_edges(&self) -> bool {
+        // Irrelevant (no inner ball, so no pruning), and a quarter arc of a thin triangle
+        // is not what the pruning bounds assume.
+        false
+    }
+
+    fn inner_radius(&self) -> f32 {
+        0.0
+    }
+
+    fn face_count(&self) -> usize {
+        5
+    }
+
+    fn plane(&self, f: usize) -> (Vec3, f32) {
+        let [v0, v1, v2] = self.vertices;
+        let n = match f {
+            0 => self.normal,
+            1 => -self.normal,
+            _ => {
+                let i = (f - 2).min(2);
+                let m = self.sides[i];
+                return (m, m.dot([v0, v1, v2][i]));
+            }
+        };
+        (n, n.dot(v0))
+    }
+
+    #[inline]
+    fn min_dot(&self, dir: Vec3) -> f32 {
+        let [a, b, c] = self.vertices;
+        scalar::min(scalar::min(dir.dot(a), dir.dot(b)), dir.dot(c))
+    }
+
+    fn edge_count(&self) -> usize {
+        6
+    }
+
+    fn edge(&self, e: usize) -> Option<PolyEdge> {
+        if e >= 6 {
+            return None;
+        }
+        let i = e / 2;
+        let j = (i + 1) % 3;
+        let m = self.sides[i];
+        // Counter-clockwise about `n`: the front face runs along `v_i → v_j`, and
+        // `n × m` and `m × (−n)` both point along the edge.
+        let (n0, n1) = if e & 1 == 0 {
+            (self.normal, m)
+        } else {
+            (m, -self.normal)
+        };
+        Some(PolyEdge {
+            v0: i as u32,
+            v1: j as u32,
+            p0: self.vertices[i],
+            p1: self.vertices[j],
+            n0,
+            n1,
+        })
+    }
+
+    fn edge_faces(&self, e: usize) -> Option<(usize, usize)> {
+        if e >= 6 {
+            return None;
+        }
+        let side = 2 + e / 2;
+        Some(if e & 1 == 0 { (0, side) } else { (side, 1) })
+    }
+
+    fn polygon(&self, f: usize) -> Face {
+        match f {
+            0 => self.triangle().supporting_face(self.normal),
+            1 => self.triangle().supporting_face(-self.normal),
+            // A side face has no area: no polygon (the caller falls back).
+            _ => Face::new(self.sides[(f.max(2) - 2).min(2)], FeatureId::face(f as u32)),
+        }
+    }
+
+    fn face_along(&self, dir: Vec3) -> Face {
+        // The triangle itself, front or back: never a side, which has no area.
+        self.triangle().supporting_face(dir)
+    }
+
+    fn center(&self) -> Vec3 {
+        let [a, b, c] = self.vertices;
+        ((a + b) + c) * (1.0 / 3.0)
+    }
+
+    fn extent(&self) -> f32 {
+        // As `manifold::polytope_order` measures a triangle.
+        let [u, v, w] = self.vertices;
+        u.abs().max(v.abs()).max(w.abs()).max_elem()
+    }
+
+    fn geometry(&self) -> Geometry<'_> {
+        Geometry::Triangle(&self.vertices)
     }
 }
 
