@@ -7,14 +7,15 @@
 //! swapped and flipped by [`flip`].
 //!
 //! - Closed forms ([`super::analytic`]): sphere and capsule pairs, half-space against
-//!   anything, sphere against box.
-//! - Box and hull pairs (box–box, box–hull, hull–hull): the separating axis test with the
-//!   pair's cached axis first ([`super::sat`]), the incident face clipped against the
-//!   reference face; capsule against box by the same test on the segment.
-//! - Sphere or capsule against a hull or triangle: GJK on the cores, EPA when the cores
-//!   overlap; a capsule lying on a face is clipped against the face's side planes (2
-//!   points).
-//! - Every other polytope pair (triangles), and the SAT pairs whose closest features the
+//!   anything, sphere against box and against a triangle.
+//! - Box and hull pairs (box–box, box–hull, hull–hull) and a box or hull against a
+//!   triangle: the separating axis test with the pair's cached axis first
+//!   ([`super::sat`]; a triangle as a flat polytope), the incident face clipped against
+//!   the reference face; capsule against box by the same test on the segment.
+//! - Sphere against a hull, capsule against a hull or triangle: GJK on the cores, EPA when
+//!   the cores overlap; a capsule lying on a face is clipped against the face's side
+//!   planes (2 points).
+//! - Every other polytope pair (two triangles), and the SAT pairs whose closest features the
 //!   test cannot name exactly ([`super::sat::SatOutcome::Fallback`]): the general path,
 //!   also available on its own as [`contact_gjk_epa`]. The axis from GJK (separated) or
 //!   EPA (overlapping, seeded from GJK's simplex, so GJK runs once), then
@@ -201,7 +202,7 @@ pub fn contact_cached(
 }
 
 /// The general path of [`contact`] for every pair, without the separating axis test and
-/// the sphere–box and capsule–box closed forms: GJK, EPA when the shapes overlap, then
+/// the sphere–box, sphere–triangle and capsule–box closed forms: GJK, EPA when the shapes overlap, then
 /// face clipping or one point (module docs). Slower; kept as the reference the fast paths
 /// are tested against. Fails like [`contact`].
 pub fn contact_gjk_epa(
@@ -602,9 +603,9 @@ fn general(
     }
 }
 
-/// The fast paths of a pair in canonical order (sphere–box is taken before, in
-/// [`contact_ordered`]): capsule–box and the box and hull pairs by the separating axis
-/// test, the manifold written to `out`; [`SatOutcome::Fallback`] for every other pair and
+/// The fast paths of a pair in canonical order (sphere–box and sphere–triangle are taken
+/// before, in [`contact_ordered`]): capsule–box, the box and hull pairs and a box or hull
+/// against a triangle by the separating axis test, the manifold written to `out`; [`SatOutcome::Fallback`] for every other pair and
 /// when a test cannot answer exactly. The cache is used by the box and hull pairs only,
 /// and reset for every other pair.
 fn fast_path(

@@ -8,8 +8,8 @@
 //! - [`separation`]: both in one: the signed separation (distance apart, minus the depth
 //!   overlapping), the normal and the witness points, whichever the case.
 //! - [`contact`]: a contact manifold of up to 4 points with feature ids; [`contact_cached`]
-//!   the same with a per-pair [`PairCache`] (box and hull pairs by the separating axis
-//!   test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
+//!   the same with a per-pair [`PairCache`] (box and hull pairs, and either against a
+//!   triangle, by the separating axis test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
 //! - [`time_of_impact`]: when two moving shapes first touch.
 //! - [`movement_bounds`]: the box a shape sweeps over a step.
 
