@@ -71,7 +71,8 @@ fn pairs<'h>(hulls: &'h [ConvexHull]) -> Vec<(&'static str, Shape<'h>, Shape<'h>
 }
 
 /// Mesh triangles (0.3 to 2 m, their vertices up to 30 m from their mesh's origin, as a
-/// height field's far cells are) against the benchmark box, hulls and ball placed near a point
+/// height field's far cells are) against the benchmark box, hulls and ball and a capsule
+/// placed near a point
 /// of the triangle or a little beyond its edges, half of them from 0.6 m below its plane to 0.8 m
 /// above, half near touching (0.35 to 0.95 m above), at random rotations; both orders, 1024 pairs.
 fn triangle_pairs<'h>(
@@ -112,7 +113,12 @@ fn triangle_pairs<'h>(
         };
         let local = o + (v1 - o) * b1 + (v2 - o) * b2;
         let up = turn.rotate(t.normal());
-        let lift = if k % 8 < 4 {
+        let lift = if k % 8 >= 6 {
+            // Capsules (0.4 half-height, 0.3 radius): their core segment above the plane,
+            // the closed form's range (a core crossing the triangle takes the general
+            // path, whose capsule points may then lie inside the capsule).
+            rng.range(0.42, 0.75)
+        } else if k % 16 < 8 {
             rng.range(0.35, 0.95)
         } else {
             rng.range(-0.6, 0.8)
@@ -120,10 +126,11 @@ fn triangle_pairs<'h>(
         let at = pose_t.transform_point(local) + up * lift;
         let pose_o = Iso::new(at, rng.rotation());
         let hull_index = (k % hulls.len()) as u8;
-        let other = match k % 6 {
+        let other = match k % 8 {
             0 | 1 => cube,
             2 | 3 => Shape::hull(&hulls[usize::from(hull_index)]),
-            _ => Shape::sphere(BALL_RADIUS).unwrap(),
+            4 | 5 => Shape::sphere(BALL_RADIUS).unwrap(),
+            _ => Shape::capsule(0.4, 0.3).unwrap(),
         };
         let q = |pose_a, pose_b| PoseQuery {
             pose_a,
@@ -131,13 +138,15 @@ fn triangle_pairs<'h>(
             hull_a: hull_index,
             hull_b: hull_index,
         };
-        out.push(match k % 6 {
+        out.push(match k % 8 {
             0 => ("box_tri", other, tri, q(pose_o, pose_t)),
             1 => ("tri_box", tri, other, q(pose_t, pose_o)),
             2 => ("hull_tri", other, tri, q(pose_o, pose_t)),
             3 => ("tri_hull", tri, other, q(pose_t, pose_o)),
             4 => ("ball_tri", other, tri, q(pose_o, pose_t)),
-            _ => ("tri_ball", tri, other, q(pose_t, pose_o)),
+            5 => ("tri_ball", tri, other, q(pose_t, pose_o)),
+            6 => ("capsule_tri", other, tri, q(pose_o, pose_t)),
+            _ => ("tri_capsule", tri, other, q(pose_t, pose_o)),
         });
     }
     out
@@ -171,11 +180,10 @@ fn plane_distance(s: &Shape, p: Vec3) -> f32 {
             let y = p.y.clamp(-c.half_height, c.half_height);
             (p - Vec3::new(0.0, y, 0.0)).length() - c.radius
         }
-        // Off the triangle's plane, either side (the triangle has no inside); scaled to
-        // the 1 m shapes of the other sets, its coordinates reaching 32 m.
+        // Off the triangle's plane, either side (the triangle has no inside).
         Shape::Triangle(t) => {
             let n = t.normal();
-            (n.dot(p) - n.dot(t.vertices[0])).abs() / 32.0
+            (n.dot(p) - n.dot(t.vertices[0])).abs()
         }
         _ => 0.0,
     }
@@ -252,8 +260,14 @@ fn fast_paths_agree_with_gjk_epa_on_the_query_sets() {
         for p in m.points() {
             let off_a = plane_distance(&a, p.local_a);
             let off_b = plane_distance(&b, p.local_b);
+            // Mesh triangles' coordinates reach 32 m: rounding of the transforms scales.
+            let surface = if name.contains("tri") {
+                32.0 * SURFACE
+            } else {
+                SURFACE
+            };
             assert!(
-                off_a.abs() <= SURFACE && off_b.abs() <= SURFACE,
+                off_a.abs() <= surface && off_b.abs() <= surface,
                 "{name} {q:?}: {p:?}"
             );
         }
@@ -803,4 +817,66 @@ fn tilted_offset_boxes_on_boxes_get_face_manifolds() {
     }
     eprintln!("{faces} of {pairs} tilted offset pairs are face contacts");
     assert!(faces * 100 >= pairs * 95, "{faces} of {pairs}");
+}
+
+/// A capsule lying on a triangle gets two points at its ends, 1 cm deep, with the face
+/// normal; half over the triangle's edge, its second point is where the segment leaves
+/// the triangle; tilted, one point at the low end; both orders flip exactly.
+#[test]
+fn a_capsule_lying_on_a_triangle_gets_two_points_and_one_when_tilted() {
+    let tri = Shape::triangle(
+        Vec3::new(-2.0, 0.0, -2.0),
+        Vec3::new(0.0, 0.0, 3.0),
+        Vec3::new(2.0, 0.0, -2.0),
+    )
+    .unwrap();
+    let capsule = Shape::capsule(0.5, 0.2).unwrap();
+    // Lying along x (its axis is local y), 1 cm into the triangle.
+    let lying = Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2);
+    let flat = Iso::new(Vec3::new(0.0, 0.19, 0.0), lying);
+    let m = contact(&capsule, &flat, &tri, &Iso::IDENTITY, 0.02)
+        .unwrap()
+        .unwrap();
+    assert_eq!(m.len, 2);
+    assert!((m.normal - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    for p in m.points() {
+        assert!((p.separation + 0.01).abs() < 1e-5, "{p:?}");
+        assert!((p.point_a.x.abs() - 0.5).abs() < 1e-5, "{p:?}");
+    }
+    let w = contact(&tri, &Iso::IDENTITY, &capsule, &flat, 0.02)
+        .unwrap()
+        .unwrap();
+    assert_eq!(w.normal, -m.normal);
+    // Half over the edge from (2, 0, −2) to (−2, 0, −2): the segment along z from −2.5
+    // to −1.5 leaves the triangle at z = −2.
+    let across = Iso::new(
+        Vec3::new(0.0, 0.19, -2.0),
+        Quat::from_axis_angle(Vec3::X, core::f32::consts::FRAC_PI_2),
+    );
+    let m = contact(&capsule, &across, &tri, &Iso::IDENTITY, 0.02)
+        .unwrap()
+        .unwrap();
+    assert_eq!(m.len, 2);
+    let mut zs: Vec<f32> = m.points().iter().map(|p| p.point_b.z).collect();
+    zs.sort_by(f32::total_cmp);
+    assert!(
+        (zs[0] + 2.0).abs() < 1e-5 && (zs[1] + 1.5).abs() < 1e-5,
+        "{zs:?}"
+    );
+    // Tilted by 0.3 rad: one end is far above the margin, one point at the low end,
+    // within 1e-5 of GJK/EPA's depth.
+    let tilted = Iso::new(
+        Vec3::new(0.0, 0.35, 0.0),
+        Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2 - 0.3),
+    );
+    let m = contact(&capsule, &tilted, &tri, &Iso::IDENTITY, 0.02)
+        .unwrap()
+        .unwrap();
+    let (s, _) = oracle(&capsule, &tilted, &tri, &Iso::IDENTITY);
+    assert_eq!(m.len, 1);
+    assert!(
+        (m.min_separation() - s).abs() < 1e-5,
+        "{} vs {s}",
+        m.min_separation()
+    );
 }

@@ -343,7 +343,7 @@ pub(crate) fn sphere_triangle(
 /// The point of triangle `t` closest to `p` and, when it lies on an edge or a vertex,
 /// that feature (`None`: inside the face). Ericson's region tests, in his order; `q` on
 /// the face is left to the caller (the plane projection is more exact).
-fn closest_on_triangle(t: &Triangle, p: Vec3) -> (Vec3, Option<FeatureId>) {
+pub(crate) fn closest_on_triangle(t: &Triangle, p: Vec3) -> (Vec3, Option<FeatureId>) {
     let [a, b, c] = t.vertices;
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d1, d2) = (ab.dot(ap), ac.dot(ap));

@@ -647,6 +647,9 @@ fn fast_path(
                 (Shape::Capsule(c), Shape::Cuboid(cb)) => {
                     sat::capsule_cuboid(c, cb, b_in_a, margin, out)
                 }
+                (Shape::Capsule(c), Shape::Triangle(t)) => {
+                    sat::capsule_triangle(c, t, b_in_a, margin, out)
+                }
                 _ => SatOutcome::Fallback,
             }
         }

@@ -1903,6 +1903,158 @@ pub(crate) fn capsule_cuboid(
     outcome
 }
 
+/// Capsule `c` (A, local frame) against triangle `t` at `b_in_a` (a mesh or height-field
+/// part), in the triangle's frame, from the exact closest points of the core segment and
+/// the triangle: the nearest of each segment end against the triangle (its Voronoi
+/// regions, [`super::analytic::closest_on_triangle`]) and the segment against each of the
+/// three edges (Ericson 5.1.9). When the segment does not pass through the triangle, their
+/// closest pair is one of those.
+///
+/// - The segment clipped against the triangle's side planes, when its nearest point there
+///   is as near as the closest pair (within the tolerance): up to 2 points along the face
+///   normal facing the segment, as a capsule on a box face gets them.
+/// - Else one point along the closest pair's direction, ids (segment feature, triangle
+///   edge or vertex).
+///
+/// [`SatOutcome::Fallback`] when the cores meet (the segment crosses the triangle or
+/// touches it): the general path's EPA gives the depth.
+pub(crate) fn capsule_triangle(
+    c: &Capsule,
+    t: &Triangle,
+    b_in_a: &Iso,
+    margin: f32,
+    out: &mut LocalManifold,
+) -> SatOutcome {
+    let (s0, s1) = c.segment();
+    let p0 = b_in_a.inverse_transform_point(s0);
+    let p1 = b_in_a.inverse_transform_point(s1);
+    let d = p1 - p0;
+    let r = c.radius;
+    let tri = TrianglePolytope::new(t);
+    let n = tri.normal;
+    let [v0, v1, v2] = t.vertices;
+    let (h0, h1) = (n.dot(p0 - v0), n.dot(p1 - v0));
+    if h0 * h1 <= 0.0 {
+        // The segment meets the plane (or a NaN): through the triangle, the cores overlap.
+        let dh = h0 - h1;
+        let x = if dh != 0.0 { p0 + d * (h0 / dh) } else { p0 };
+        if super::analytic::closest_on_triangle(t, x).1.is_none() || !dh.is_finite() {
+            return SatOutcome::Fallback;
+        }
+        // Through an edge or a vertex (within rounding): the closest pair below has a gap
+        // of rounding size, and the guard on it falls back.
+    }
+    // (squared gap, segment parameter, segment point, triangle point, triangle feature);
+    // ends first, then edges in order, strict `<`.
+    let mut best: Option<(f32, f32, Vec3, Vec3, FeatureId)> = None;
+    let mut consider = |s: f32, on_segment: Vec3, on_tri: Vec3, feature: FeatureId| {
+        let gap2 = (on_segment - on_tri).length_squared();
+        if best.is_none_or(|(g, ..)| gap2 < g) {
+            best = Some((gap2, s, on_segment, on_tri, feature));
+        }
+    };
+    for (s, p) in [(0.0, p0), (1.0, p1)] {
+        let (q, feature) = super::analytic::closest_on_triangle(t, p);
+        let on_tri = if feature.is_none() {
+            p - n * n.dot(p - v0)
+        } else {
+            q
+        };
+        consider(s, p, on_tri, feature.unwrap_or(FeatureId::face(0)));
+    }
+    for (i, (a, b)) in [(v0, v1), (v1, v2), (v2, v0)].into_iter().enumerate() {
+        let (s, u) = segment_closest_points(p0, p1, a, b);
+        let j = (i + 1) % 3;
+        let feature = match feature_at(u) {
+            f if f == FeatureId::vertex(0) => FeatureId::vertex(i as u32),
+            f if f == FeatureId::vertex(1) => FeatureId::vertex(j as u32),
+            _ => FeatureId::edge(i as u32, j as u32),
+        };
+        consider(s, p0 + d * s, a + (b - a) * u, feature);
+    }
+    let Some((_, s, on_segment, on_tri, feature)) = best else {
+        return SatOutcome::Fallback;
+    };
+    let tol = SAT_TOLERANCE
+        * (b_in_a.position.abs().max_elem() + tri.extent() + c.half_height + c.radius);
+    let Some((toward, gap)) = (on_tri - on_segment).normalize_and_length() else {
+        return SatOutcome::Fallback;
+    };
+    if gap <= GUARD_FACTOR * tol {
+        // The cores touch within rounding (a segment through an edge): no direction.
+        return SatOutcome::Fallback;
+    }
+    let within = gap - r <= margin; // false for NaN too
+    if !within {
+        return SatOutcome::Separated;
+    }
+    let to_a = |p: Vec3| b_in_a.transform_point(p);
+    // The face on the closest segment point's side (where the clipped part lies when it
+    // matters); the segment clipped to the side planes.
+    let front = if n.dot(on_segment - v0) >= 0.0 { 0 } else { 1 };
+    let f = tri.polygon(front);
+    let nf = f.normal;
+    let mut buffers = clip::ClipBuffers::new();
+    let clipped = buffers.segment(
+        &f,
+        p0,
+        p1,
+        [FeatureId::vertex(0), FeatureId::vertex(1)],
+        FeatureId::edge(0, 1),
+    );
+    let f0 = f.vertices[0];
+    let lowest = clipped
+        .vertices()
+        .iter()
+        .map(|v| (v.point - f0).dot(nf))
+        .fold(f32::INFINITY, scalar::min);
+    if lowest <= gap + tol {
+        // Face contact: as capsule_cuboid's, the capsule's surface point facing the face
+        // at each clipped point (end cap or cylinder) and its projection on the face.
+        let normal = b_in_a.transform_vector(-nf);
+        let dd = d.length_squared();
+        let along = nf.dot(d);
+        let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
+        let cylinder = across.normalize_or(nf);
+        out.reset(normal);
+        for v in clipped.vertices() {
+            let height = (v.point - f0).dot(nf);
+            let id = ContactId {
+                a: v.inc_id,
+                b: v.ref_id,
+            };
+            let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
+                || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
+            let toward_face = if past_end { nf } else { cylinder };
+            let point_a = to_a(v.point - toward_face * r);
+            let point_b = to_a(v.point - nf * height);
+            out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
+        }
+        // As deep as the closest pair says (a clipped point inside the segment measures
+        // the cylinder straight down, `r cos β` for a capsule tilted by β, shallower than
+        // the closest pair where that lies on an edge): else the one point below.
+        if out.len > 0 && out.min_separation() <= gap - r + GUARD_FACTOR * tol {
+            return SatOutcome::Contact;
+        }
+    }
+    // One point along the closest pair, from the capsule towards the triangle.
+    let normal = b_in_a.transform_vector(toward);
+    let id = ContactId {
+        a: feature_at(s),
+        b: feature,
+    };
+    out.reset(normal);
+    out.push_within(
+        Candidate::new(to_a(on_segment + toward * r), to_a(on_tri), normal, id),
+        margin,
+    );
+    if out.len > 0 {
+        SatOutcome::Contact
+    } else {
+        SatOutcome::Fallback
+    }
+}
+
 /// A capsule whose core segment `p0 → p1` (box frame) is apart from box `b`: the exact
 /// closest points, the nearest of each segment end against the box (the end clamped to
 /// the box) and the segment against each of the 12 box edges (Ericson 5.1.9). When the
