@@ -1468,34 +1468,3 @@ fn deepest_points_of_touching_cores_may_slide_along_the_edge() {
     // The depth is the radius: the centre is on the edge.
     assert!((p.depth - 0.015258789).abs() < 1e-6, "{p:?}");
 }
-
-/// Root cause: GJK stopped "apart" on a closest point whose direction was rounding. Two
-/// 3.3 m boxes, one turned by about 2e-3 rad, overlap by 7.6 mm (f64 separating axis
-/// test); GJK's segment of `D`, metres long, passed 0.24 mm from the origin, and the
-/// closest point's lateral error (4e-7 m) tilted `v` by 1.6e-3 rad, so the support along
-/// `−v` was a far corner, the sub-algorithm dropped it, and the run stopped with the cores
-/// 0.24 mm apart; the other order found the overlap. Fix: a stop whose support reaches
-/// past the origin by more than 1e-4 of its length is overlap (`collide::gjk`,
-/// `GJK_CLEARLY_BEYOND`), and EPA gives the depth. Fuzz finding
-/// `big-boxes-tilted-normal-5c2ee9ea` (separation(b, a) differed from separation(a, b)).
-#[test]
-fn gjk_does_not_stop_apart_on_a_tilted_direction() {
-    let q = |x: i16, y: i16, z: i16, w: i16| {
-        Quat::from_xyzw(f32::from(x), f32::from(y), f32::from(z), f32::from(w)).normalize()
-    };
-    // The finding's tame values: sizes in 1/8192 m, coordinates in 1/4096 m.
-    let h = 26986.0 / 8192.0;
-    let c = 26985.0 / 4096.0;
-    let cube = Shape::cuboid(Vec3::splat(h)).unwrap();
-    let pa = Iso::new(Vec3::splat(c), q(26985, 26985, 26985, 26985));
-    let pb = Iso::new(
-        Vec3::new(-2.0 / 4096.0, c, c),
-        q(26921, 26985, 26985, 26985),
-    );
-    // The f64 separating axis test over the 15 axes gives −7.5686 mm.
-    for (x, px, y, py) in [(&cube, &pa, &cube, &pb), (&cube, &pb, &cube, &pa)] {
-        let s = carom::collide::separation(x, px, y, py).unwrap();
-        assert!((s.separation + 0.0075686).abs() < 1.0e-5, "{s:?}");
-    }
-    assert_cases(&[("big boxes", cube, pa, cube, pb, 26986.0 / 65536.0)]);
-}

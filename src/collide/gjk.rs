@@ -869,21 +869,6 @@ fn beyond_origin(v: Vec3, w: Vec3) -> bool {
     vw < 0.0 && vw * vw > tol2 * v.length_squared() * w.length_squared()
 }
 
-/// How far past the origin, relative to `|w|`, a support must reach along `−v` for a stop
-/// with a `v` longer than the direction tolerance to read as overlap: far above the
-/// support's own rounding (about 1e-7 of `|w|`, the thin-box case of `gjk_cores`), far
-/// below what a tilted direction shows (1.3e-3 in the big-boxes finding).
-const GJK_CLEARLY_BEYOND: f32 = 1.0e-4;
-
-/// `v·w < −GJK_CLEARLY_BEYOND |v| |w|`: the lower bound `v·w / |v|` of the distance is
-/// clearly negative, so `v`'s direction does not separate anything. False for NaN.
-#[inline]
-fn clearly_beyond_origin(v: Vec3, w: Vec3) -> bool {
-    let vw = v.dot(w);
-    let tol2 = GJK_CLEARLY_BEYOND * GJK_CLEARLY_BEYOND;
-    vw < 0.0 && vw * vw > tol2 * v.length_squared() * w.length_squared()
-}
-
 /// True when a closest point `v` on a simplex of `count` points has no trustworthy
 /// direction (see [`GJK_DIRECTION_TOLERANCE`]): a vertex or an edge of `D` within the
 /// tolerance of the origin. False for NaN.
@@ -934,20 +919,8 @@ pub(crate) fn gjk_cores(
         // apart, at the accurate `|v|`.
         let near_origin =
             v.length_squared() <= GJK_DIRECTION_TOLERANCE * GJK_DIRECTION_TOLERANCE * size2;
-        // A longer `v` whose support reaches past the origin by far more than that
-        // rounding (`clearly_beyond_origin`) has a direction that is itself rounding: a
-        // segment of `D` some metres long passing 0.24 mm from the origin has a closest
-        // point whose lateral error tilts it by 1.6e-3 rad, and the support along the
-        // tilted `−v` is a far corner (two 3.3 m boxes overlapping by 7.6 mm read as 0.24
-        // mm apart, fuzz finding `big-boxes-tilted-normal-5c2ee9ea`): overlapping, and
-        // EPA gives the depth.
         let apart = || {
-            let beyond = if near_origin {
-                beyond_origin(v_now, w.w)
-            } else {
-                clearly_beyond_origin(v_now, w.w)
-            };
-            if beyond {
+            if near_origin && beyond_origin(v_now, w.w) {
                 GjkStatus::Overlapping
             } else {
                 GjkStatus::Separated
