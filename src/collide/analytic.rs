@@ -236,25 +236,46 @@ pub(crate) fn sphere_cuboid(
             (outward, on_box, -depth - r, FeatureId::face(f as u32))
         }
     };
-    // World frame, from the sphere towards the box.
-    let normal = pose_b.transform_vector(-outward);
+    let on = SphereOn {
+        outward,
+        point: on_box,
+        separation,
+        feature,
+    };
+    one_sphere_point(pose_a, r, pose_b, &on, out)
+}
+
+/// The one point of a sphere against a shape B, found in B's frame: `outward` from B
+/// towards the centre (unit), `point` on B, `separation` (m), B's `feature`.
+struct SphereOn {
+    outward: Vec3,
+    point: Vec3,
+    separation: f32,
+    feature: FeatureId,
+}
+
+/// Write the one point of `on` into `out`, world frame, the normal from the sphere (radius
+/// `r` at `pose_a`) towards B (at `pose_b`): the sphere's surface point along the normal
+/// and B's point. False when a number is not finite.
+fn one_sphere_point(pose_a: &Iso, r: f32, pose_b: &Iso, on: &SphereOn, out: &mut Manifold) -> bool {
+    let normal = pose_b.transform_vector(-on.outward);
     let on_sphere = normal * r;
     let point = ManifoldPoint {
         point_a: pose_a.position + on_sphere,
-        point_b: pose_b.transform_point(on_box),
+        point_b: pose_b.transform_point(on.point),
         local_a: pose_a.inverse_transform_vector(on_sphere),
-        local_b: on_box,
-        separation,
+        local_b: on.point,
+        separation: on.separation,
         id: ContactId {
             a: FeatureId::vertex(0),
-            b: feature,
+            b: on.feature,
         },
     };
     let finite = normal.is_finite()
         && point.point_a.is_finite()
         && point.point_b.is_finite()
         && point.local_a.is_finite()
-        && separation.is_finite();
+        && on.separation.is_finite();
     if !finite {
         return false;
     }
@@ -313,31 +334,13 @@ pub(crate) fn sphere_triangle(
         crate::shape::FeatureKind::Face => p - n * height,
         _ => q,
     };
-    let normal = pose_b.transform_vector(-outward);
-    let on_sphere = normal * a.radius;
-    let point = ManifoldPoint {
-        point_a: pose_a.position + on_sphere,
-        point_b: pose_b.transform_point(on_triangle),
-        local_a: pose_a.inverse_transform_vector(on_sphere),
-        local_b: on_triangle,
+    let on = SphereOn {
+        outward,
+        point: on_triangle,
         separation,
-        id: ContactId {
-            a: FeatureId::vertex(0),
-            b: feature,
-        },
+        feature,
     };
-    let finite = normal.is_finite()
-        && point.point_a.is_finite()
-        && point.point_b.is_finite()
-        && point.local_a.is_finite()
-        && separation.is_finite();
-    if !finite {
-        return false;
-    }
-    out.normal = normal;
-    out.points[0] = point;
-    out.len = 1;
-    true
+    one_sphere_point(pose_a, a.radius, pose_b, &on, out)
 }
 
 /// The point of triangle `t` closest to `p` and, when it lies on an edge or a vertex,

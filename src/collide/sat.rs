@@ -1855,7 +1855,6 @@ pub(crate) fn capsule_cuboid(
         }
         _ => {
             let f = b.face(face.index / 2, face.index % 2 == 1);
-            let nf = f.normal;
             let mut buffers = clip::ClipBuffers::new();
             let clipped = buffers.segment(
                 &f,
@@ -1864,30 +1863,7 @@ pub(crate) fn capsule_cuboid(
                 [FeatureId::vertex(0), FeatureId::vertex(1)],
                 FeatureId::edge(0, 1),
             );
-            let normal = b_in_a.transform_vector(-nf);
-            let f0 = f.vertices[0];
-            // The capsule's surface point facing the face at a segment point: on the end
-            // cap, along −n, when n points out past that end of the segment; else on the
-            // cylinder, along the part of n perpendicular to the segment (a tilted
-            // capsule's middle is `r cos α` above its axis, not `r`).
-            let along = nf.dot(d);
-            let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
-            let cylinder = across.normalize_or(nf);
-            out.reset(normal);
-            for v in clipped.vertices() {
-                // Height (m) of the segment point above the face plane.
-                let height = (v.point - f0).dot(nf);
-                let id = ContactId {
-                    a: v.inc_id,
-                    b: v.ref_id,
-                };
-                let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
-                    || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
-                let toward_face = if past_end { nf } else { cylinder };
-                let point_a = to_a(v.point - toward_face * r);
-                let point_b = to_a(v.point - nf * height);
-                out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
-            }
+            capsule_on_face(clipped, &f, d, r, b_in_a, margin, out);
             let guard = face.separation - r + GUARD_FACTOR * tol;
             if out.len > 0 && out.min_separation() <= guard {
                 SatOutcome::Contact
@@ -2009,27 +1985,8 @@ pub(crate) fn capsule_triangle(
         .map(|v| (v.point - f0).dot(nf))
         .fold(f32::INFINITY, scalar::min);
     if lowest <= gap + tol {
-        // Face contact: as capsule_cuboid's, the capsule's surface point facing the face
-        // at each clipped point (end cap or cylinder) and its projection on the face.
-        let normal = b_in_a.transform_vector(-nf);
-        let dd = d.length_squared();
-        let along = nf.dot(d);
-        let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
-        let cylinder = across.normalize_or(nf);
-        out.reset(normal);
-        for v in clipped.vertices() {
-            let height = (v.point - f0).dot(nf);
-            let id = ContactId {
-                a: v.inc_id,
-                b: v.ref_id,
-            };
-            let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
-                || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
-            let toward_face = if past_end { nf } else { cylinder };
-            let point_a = to_a(v.point - toward_face * r);
-            let point_b = to_a(v.point - nf * height);
-            out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
-        }
+        // Face contact, as capsule_cuboid's.
+        capsule_on_face(clipped, &f, d, r, b_in_a, margin, out);
         // As deep as the closest pair says (a clipped point inside the segment measures
         // the cylinder straight down, `r cos β` for a capsule tilted by β, shallower than
         // the closest pair where that lies on an edge): else the one point below.
@@ -2052,6 +2009,46 @@ pub(crate) fn capsule_triangle(
         SatOutcome::Contact
     } else {
         SatOutcome::Fallback
+    }
+}
+
+/// The face contact of a capsule whose core segment `d` (B's frame), clipped against the
+/// side planes of B's face `f`, gave `clipped`: at each clipped point, the capsule's
+/// surface point facing the face and its projection on the face, into `out` (A's frame,
+/// normal `−n` from the capsule towards B) when within `margin`. The surface point is on
+/// the end cap, along `−n`, when `n` points out past that end of the segment; else on the
+/// cylinder, along the part of `n` perpendicular to the segment (a tilted capsule's middle
+/// is `r cos α` above its axis, not `r`).
+fn capsule_on_face(
+    clipped: &clip::ClipPolygon,
+    f: &Face,
+    d: Vec3,
+    r: f32,
+    b_in_a: &Iso,
+    margin: f32,
+    out: &mut LocalManifold,
+) {
+    let nf = f.normal;
+    let f0 = f.vertices[0];
+    let normal = b_in_a.transform_vector(-nf);
+    let dd = d.length_squared();
+    let along = nf.dot(d);
+    let across = if dd > 0.0 { nf - d * (along / dd) } else { nf };
+    let cylinder = across.normalize_or(nf);
+    out.reset(normal);
+    for v in clipped.vertices() {
+        // Height (m) of the segment point above the face plane.
+        let height = (v.point - f0).dot(nf);
+        let id = ContactId {
+            a: v.inc_id,
+            b: v.ref_id,
+        };
+        let past_end = (v.inc_id == FeatureId::vertex(0) && along >= 0.0)
+            || (v.inc_id == FeatureId::vertex(1) && along <= 0.0);
+        let toward_face = if past_end { nf } else { cylinder };
+        let point_a = b_in_a.transform_point(v.point - toward_face * r);
+        let point_b = b_in_a.transform_point(v.point - nf * height);
+        out.push_within(Candidate::new(point_a, point_b, normal, id), margin);
     }
 }
 
