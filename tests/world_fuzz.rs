@@ -758,3 +758,57 @@ fn finding_a_subnormal_density_is_refused_not_inverted_to_infinity() {
         assert_eq!(world_ops_properties(&[WorldOp::Add(spec), push]), Ok(()));
     });
 }
+
+/// Finding `fuzz/findings/mesh/speed-limit-after-the-solve-aa285ab2` (the `mesh` target,
+/// a restore refusing the world's own snapshot): two compounds with 51 km-long sliver
+/// hull parts, dropped inside each other, left their first step at 1e21 m/s with a NaN
+/// spin and 1e25 m away, past the 1e10 m a snapshot may hold. Root cause: the speed
+/// limits were applied when gravity and forces were integrated, not after the contact
+/// solve, so one ill-conditioned solve moved the bodies by whatever speed it produced.
+/// Fix: the limits also hold where positions integrate and where velocities are written
+/// back (a non-finite velocity becomes zero there, as everywhere). Here a clean case of
+/// the same gap: a heavy ball at the 10 m/s limit hits a light one elastically; the light
+/// one would leave at about 20 m/s.
+#[test]
+fn finding_the_contact_solve_cannot_fling_a_body_past_the_speed_limits() {
+    with_stack(|| {
+        let config = WorldConfig {
+            gravity: Vec3::ZERO,
+            max_linear_speed: 10.0,
+            ..WorldConfig::default()
+        };
+        let mut w = OpsWorld::with_config(config).unwrap();
+        let bouncy = Material {
+            restitution: 1.0,
+            ..Material::default()
+        };
+        let heavy = w
+            .add(
+                BodyDesc::dynamic(sphere(1.0))
+                    .position(Vec3::new(-2.0, 0.0, 0.0))
+                    .velocity(Vec3::new(10.0, 0.0, 0.0))
+                    .density(1000.0)
+                    .material(bouncy),
+            )
+            .unwrap();
+        let light = w
+            .add(
+                BodyDesc::dynamic(sphere(0.1))
+                    .position(Vec3::new(-0.5, 0.0, 0.0))
+                    .density(1.0)
+                    .material(bouncy),
+            )
+            .unwrap();
+        let mut fastest = 0.0f32;
+        for _ in 0..30 {
+            w.step();
+            fastest = fastest.max(w.body(light).unwrap().linear_velocity().x);
+        }
+        // The heavy ball kept going; the light one was hit and runs at the limit.
+        assert!(w.body(heavy).unwrap().linear_velocity().x > 9.0);
+        assert!(
+            fastest > 9.9 && fastest <= 10.0 * (1.0 + 1.0e-6),
+            "light ball at {fastest} m/s"
+        );
+    });
+}

@@ -18,12 +18,14 @@
 //!     integrate velocities     v += h (g + F/m), ω += h I⁻¹ τ, damping, speed limits
 //!     warm start               apply the accumulated impulses again
 //!     solve                    `velocity_iterations` soft iterations (push-out)
-//!     integrate positions      Δp += v h, q ← q + ½ h ω q (normalised)
+//!     integrate positions      speed limits again (the solve may exceed them),
+//!                              Δp += v h, q ← q + ½ h ω q (normalised)
 //!     relax                    `relax_iterations` iterations without push-out, with
 //!                              friction, rolling and twist
 //! restitution the points that were far at prepare and pushed: bounce from v_n0
 //! store       accumulated impulses and stick/slip state back to the contacts
-//! finalize    poses, velocities and R I⁻¹ Rᵀ back to the bodies
+//! finalize    poses, velocities (within the speed limits) and R I⁻¹ Rᵀ back to the
+//!             bodies
 //! ```
 //!
 //! The rows themselves (soft normal rows, friction, rolling and twist, the collision
@@ -161,14 +163,14 @@ pub(crate) fn solve<const N: usize, const C: usize>(
         for _ in 0..cfg.velocity_iterations {
             wide::solve(store, sbodies, cfg, inv_h, true, false);
         }
-        integrate_positions(sbodies, h);
+        integrate_positions(sbodies, h, cfg);
         for k in 0..cfg.relax_iterations {
             let last = sub + 1 == cfg.substeps && k + 1 == cfg.relax_iterations;
             wide::solve(store, sbodies, cfg, inv_h, false, last);
         }
     }
     restitution_and_store(store, sbodies, contacts, cfg);
-    finalize(solver, bodies);
+    finalize(solver, bodies, cfg);
 }
 
 /// Colour the contacts that push (`wide.rs`), pack them four to a group in colour
@@ -466,9 +468,13 @@ fn integrate_velocities(bodies: &mut [SolverBody], cfg: &WorldConfig) {
     }
 }
 
-/// `Δp += v h`, `q ← normalise(q + ½ h (ω, 0) q)`, `R = R(q)`.
-fn integrate_positions(bodies: &mut [SolverBody], h: f32) {
+/// The speed limits (the solve just ran and may have passed them; a non-finite
+/// velocity becomes zero), then `Δp += v h`, `q ← normalise(q + ½ h (ω, 0) q)`,
+/// `R = R(q)`.
+fn integrate_positions(bodies: &mut [SolverBody], h: f32, cfg: &WorldConfig) {
     for b in bodies.iter_mut() {
+        b.v = clamp_length(b.v, cfg.max_linear_speed);
+        b.w = clamp_length(b.w, cfg.max_angular_speed);
         b.dp += b.v * h;
         b.q = b.q.integrate(b.w, h);
         b.rot = Mat3::from_quat(b.q);
@@ -477,15 +483,19 @@ fn integrate_positions(bodies: &mut [SolverBody], h: f32) {
 
 /// Write the solver bodies back: centre of mass moved by `Δp`, rotation, velocities,
 /// `R I⁻¹ Rᵀ`.
-fn finalize<const N: usize, const C: usize>(solver: &Solver<N, C>, bodies: &mut Pool<Body<'_>, N>) {
+fn finalize<const N: usize, const C: usize>(
+    solver: &Solver<N, C>,
+    bodies: &mut Pool<Body<'_>, N>,
+    cfg: &WorldConfig,
+) {
     for sb in solver.bodies.iter() {
         let Some(b) = bodies.at_mut(sb.slot as usize) else {
             continue;
         };
         let c = b.world_center() + sb.dp;
         b.set_center_pose(c, sb.q);
-        b.linear_velocity = sb.v;
-        b.angular_velocity = sb.w;
+        b.linear_velocity = clamp_length(sb.v, cfg.max_linear_speed);
+        b.angular_velocity = clamp_length(sb.w, cfg.max_angular_speed);
     }
 }
 

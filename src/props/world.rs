@@ -831,6 +831,7 @@ impl<'h> Run<'h> {
             let model = &self.model;
             check_report(&self.world, &report, &|h| model.is_live(h), self.in_range)?;
             self.check_state()?;
+            speeds_within_limits(&self.world)?;
         }
         Ok(())
     }
@@ -1166,6 +1167,25 @@ fn check_report(
             live(a) && live(b) && a != b,
             "event: names a dead body or the same body twice",
         )?;
+    }
+    Ok(())
+}
+
+/// After a step every dynamic body moves within the configured speed limits (to the
+/// rounding of one scaling): the limits hold at every stage of the step, so the contact
+/// solve cannot fling a body faster than the integration allows.
+fn speeds_within_limits(world: &OpsWorld<'_>) -> Result<(), Violation> {
+    let cfg = world.config();
+    let within = |v: Vec3, max: f32| v.length() <= max * (1.0 + 1.0e-5);
+    for h in world.handles() {
+        let Ok(b) = world.body(h) else { continue };
+        if b.kind() == BodyKind::Dynamic {
+            check(
+                within(b.linear_velocity(), cfg.max_linear_speed)
+                    && within(b.angular_velocity(), cfg.max_angular_speed),
+                "step: a dynamic body is faster than the speed limits",
+            )?;
+        }
     }
     Ok(())
 }
