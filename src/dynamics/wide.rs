@@ -272,14 +272,14 @@ impl Group<'_> {
         let flags = self.s3.idx.get(l).copied().unwrap_or(0);
         let len = usize::from(c.len).min((flags & 0xff) as usize);
         for (j, q) in c.points.iter_mut().take(len).enumerate() {
-            q.normal_impulse = self.point(j).normal_impulse.lane(l);
+            q.normal_impulse = stored(self.point(j).normal_impulse.lane(l));
         }
         let (q0, q1, q2) = (&self.s0.s, &self.s1.s, &self.s2.s);
         let t1 = lane_v(q0, T1, l);
         let t2 = lane_v(q0, T2, l);
-        c.friction_impulse =
-            t1 * f4(q1, TANGENT_IMPULSE).lane(l) + t2 * f4(q1, TANGENT_IMPULSE + 1).lane(l);
-        c.twist_impulse = f4(q2, ANGULAR_IMPULSE + 2).lane(l);
+        let f = t1 * f4(q1, TANGENT_IMPULSE).lane(l) + t2 * f4(q1, TANGENT_IMPULSE + 1).lane(l);
+        c.friction_impulse = Vec3::new(stored(f.x), stored(f.y), stored(f.z));
+        c.twist_impulse = stored(f4(q2, ANGULAR_IMPULSE + 2).lane(l));
         c.sticking = flags & STICKING != 0;
     }
 
@@ -711,6 +711,19 @@ fn push_tangent(a: &mut Bodies4, b: &mut Bodies4, sh: &Shared, q2: &[F4; QUARTER
     b.w.add_scaled(&v4(q2, IT_B1), l[1]);
 }
 
+/// An accumulated impulse (N·s) as a contact keeps it: within the
+/// [`MAX_STATE_FORCE`](super::snapshot::MAX_STATE_FORCE) bound a snapshot accepts, and zero
+/// when not finite. Only an ill-conditioned pair (kilometre-long slivers of 1e8 kg) comes
+/// near the bound; the next warm start bounds the impulse far tighter anyway.
+fn stored(x: f32) -> f32 {
+    let max = super::snapshot::MAX_STATE_FORCE;
+    if x.is_finite() {
+        x.clamp(-max, max)
+    } else {
+        0.0
+    }
+}
+
 /// One iteration over every group: normal rows (soft with `use_bias`, rigid without),
 /// the friction patch, twist and rolling; `last` marks the last relax iteration of the
 /// step, where stick/slip changes.
@@ -989,6 +1002,28 @@ fn solve_rolling(
         b.w.add_scaled(&v4(q3, IB_AXES + 3 * i), d);
         if let Some(x) = q2.get_mut(ANGULAR_IMPULSE + i) {
             *x = new.get(i).copied().unwrap_or_default();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::dynamics::snapshot::MAX_STATE_FORCE;
+
+    /// Finding `fuzz/findings/mesh/impulse-past-the-snapshot-bound-487019bf` (replayed by
+    /// CI): two 6.6e8 kg compounds with kilometre-long sliver parts ended a step with a
+    /// twist impulse of −3.8e30 N·s, past the 1e30 a snapshot holds, and restore refused
+    /// the world's own snapshot. Impulses are now stored within the bound, and a
+    /// non-finite one as zero; ordinary values pass bit for bit.
+    #[test]
+    fn stored_impulses_stay_within_what_a_snapshot_holds() {
+        assert_eq!(stored(-3.830862e30), -MAX_STATE_FORCE);
+        assert_eq!(stored(f32::MAX), MAX_STATE_FORCE);
+        assert_eq!(stored(f32::NAN), 0.0);
+        assert_eq!(stored(f32::NEG_INFINITY), 0.0);
+        for x in [0.0, -0.0, 1.0e-40, 12.5, -7.25e29, MAX_STATE_FORCE] {
+            assert_eq!(stored(x).to_bits(), x.to_bits());
         }
     }
 }
