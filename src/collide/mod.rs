@@ -13,7 +13,7 @@
 //! - [`time_of_impact`]: when two moving shapes first touch.
 //! - [`movement_bounds`]: the box a shape sweeps over a step.
 
-mod analytic;
+pub(crate) mod analytic;
 mod clip;
 mod epa;
 mod gjk;

@@ -472,9 +472,11 @@ fn update_group(
     tested: &mut u32,
     was_touching: bool,
 ) {
+    // The pair's sweep reach is the same for every part: taken once.
+    let reach = pair_reach(a, b, cfg);
     let reusable = group
         .iter()
-        .all(|c| plan(c, a, b, cfg).is_some_and(|p| p.reusable(c)));
+        .all(|c| plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c)));
     if reusable {
         for c in group.iter_mut() {
             reuse(c, a, b, cfg);
@@ -492,7 +494,7 @@ fn update_group(
     }
     for c in group.iter_mut() {
         *tested = tested.saturating_add(1);
-        match plan(c, a, b, cfg) {
+        match plan(c, a, b, cfg, reach) {
             Some(p) => {
                 build(c, &p, a, b, cfg);
             }
@@ -564,7 +566,8 @@ fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
 /// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
 /// build a new one and carry the impulses over (module docs).
 fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
-    let Some(plan) = plan(c, body_a, body_b, cfg) else {
+    let reach = pair_reach(body_a, body_b, cfg);
+    let Some(plan) = plan(c, body_a, body_b, cfg, reach) else {
         c.len = 0;
         c.touching = false;
         return;
@@ -596,19 +599,26 @@ struct Plan<'a> {
     b_in_a: Iso,
 }
 
-/// The plan of contact `c`'s narrow phase; `None` for a part key that names no part.
+/// How far (m) the surfaces of `body_a` and `body_b` can close within the step when
+/// either is swept by continuous collision (the manifold's margin grows by it); else 0.
+fn pair_reach(body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> f32 {
+    let swept = |b: &Body<'_>| b.ccd && b.kind == crate::BodyKind::Dynamic;
+    if swept(body_a) || swept(body_b) {
+        cfg.dt * closing_bound(body_a, body_b)
+    } else {
+        0.0
+    }
+}
+
+/// The plan of contact `c`'s narrow phase, its margin grown by the pair's `reach`
+/// ([`pair_reach`]); `None` for a part key that names no part.
 fn plan<'a>(
     c: &Contact,
     body_a: &Body<'a>,
     body_b: &Body<'a>,
     cfg: &WorldConfig,
+    reach: f32,
 ) -> Option<Plan<'a>> {
-    let swept = |b: &Body<'_>| b.ccd && b.kind == crate::BodyKind::Dynamic;
-    let reach = if swept(body_a) || swept(body_b) {
-        cfg.dt * closing_bound(body_a, body_b)
-    } else {
-        0.0
-    };
     let parts = if c.is_part() {
         Some(mid_phase::part_pair(&body_a.shape, &body_b.shape, c.sub)?)
     } else {
@@ -665,14 +675,14 @@ fn build(
     cfg: &WorldConfig,
 ) -> bool {
     let built_margin = plan.margin + REUSE_SLACK;
-    let mut manifold = contact_cached_unchecked(
-        &plan.shape_a,
-        &plan.pose_a,
-        &plan.shape_b,
-        &plan.pose_b,
-        built_margin,
-        &mut c.sat_cache,
-    );
+    let (a, pose_a, b, pose_b) = (&plan.shape_a, &plan.pose_a, &plan.shape_b, &plan.pose_b);
+    let out_of_reach =
+        plan.parts.is_some() && mid_phase::beyond_reach(a, pose_a, b, pose_b, built_margin);
+    let mut manifold = if out_of_reach {
+        None
+    } else {
+        contact_cached_unchecked(a, pose_a, b, pose_b, built_margin, &mut c.sat_cache)
+    };
     if let (Some(m), Some(p)) = (manifold.as_mut(), &plan.parts) {
         let (a, b) = (&body_a.shape, &body_b.shape);
         mid_phase::correct_mesh_contact(m, a, &body_a.pose, b, &body_b.pose, c.sub);

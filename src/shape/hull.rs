@@ -96,6 +96,10 @@ pub struct ConvexHull {
     /// computed once at build: the radius of a ball about the centroid inside the hull,
     /// which the separating axis test's bounds use on every query.
     pub(crate) inner_radius: f32,
+    /// The largest vertex distance from the local origin (m), computed once at build:
+    /// [`Shape::bounding_radius`](crate::Shape::bounding_radius), asked for on every part
+    /// contact and every swept pair.
+    pub(crate) outer_radius: f32,
 }
 
 /// Largest `|u · n|` (u an edge's unit vector, n the normal of a face beside it) for
@@ -139,6 +143,7 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     thinnest: 0.0,
     well_formed_edges: false,
     inner_radius: 0.0,
+    outer_radius: 0.0,
 };
 
 impl ConvexHull {
@@ -476,6 +481,11 @@ impl ConvexHull {
     }
 
     pub(crate) fn bounding_radius(&self) -> f32 {
+        self.outer_radius
+    }
+
+    /// The largest vertex distance from the local origin (m), for [`Self::outer_radius`].
+    fn farthest_vertex(&self) -> f32 {
         let mut r = 0.0;
         for v in self.vertices() {
             r = scalar::max(r, v.length());
@@ -1508,6 +1518,7 @@ impl<'p> Builder<'p> {
         hull.thinnest = hull.thinnest_width();
         hull.well_formed_edges = hull.edges_run_along_faces();
         hull.inner_radius = hull.centroid_depth();
+        hull.outer_radius = hull.farthest_vertex();
         Ok(hull)
     }
 
