@@ -802,8 +802,9 @@ mod tests {
     #[test]
     fn movement_cover_holds_the_movement_bounds() {
         let mut rng = SplitMix64::new(17);
-        let hull_points: std::vec::Vec<Vec3> =
-            (0..10).map(|_| rng.unit_vector() * rng.range(0.1, 2.0)).collect();
+        let hull_points: std::vec::Vec<Vec3> = (0..10)
+            .map(|_| rng.unit_vector() * rng.range(0.1, 2.0))
+            .collect();
         let hull = crate::shape::ConvexHull::new(&hull_points).unwrap();
         let shapes = [
             Shape::sphere(0.3).unwrap(),
@@ -825,7 +826,10 @@ mod tests {
             let dt = 1.0 / 60.0;
             let exact = movement_bounds(&shape, &motion, dt);
             let cover = movement_cover(&shape, &motion, dt);
-            assert!(cover.contains(&exact), "case {i}: {cover:?} misses {exact:?}");
+            assert!(
+                cover.contains(&exact),
+                "case {i}: {cover:?} misses {exact:?}"
+            );
         }
     }
 
