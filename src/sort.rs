@@ -15,10 +15,124 @@ pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
 }
 
 /// Sort pairs of `u32` ascending (as tuples compare: first, then second), comparing each
-/// pair as one `u64`.
+/// pair as one `u64` key.
+///
+/// One bucket pass, then a small sort per bucket: the keys' span `max − min` is cut into
+/// [`BUCKETS`] ranges by its top significant bits, each pair is moved into its range in
+/// place (a cycle walk: every swap puts one pair where it belongs, at most `n` swaps),
+/// and each range is sorted by insertion when it holds at most [`INSERTION_MAX`] pairs,
+/// by the heapsort otherwise (so the worst case stays O(n log n)). The solver's hashed
+/// keys and the broad phase's slot pairs spread over the ranges, so most hold a few
+/// pairs: about a tenth of the heapsort's work for a thousand contacts. The result is
+/// the one sorted order of the keys, whichever way it was reached.
 pub(crate) fn sort_pairs(v: &mut [(u32, u32)]) {
     let key = |p: &(u32, u32)| (u64::from(p.0) << 32) | u64::from(p.1);
-    sort_unstable_by(v, |a, b| key(a) < key(b));
+    if v.len() <= INSERTION_MAX {
+        insertion_sort_by(v, |a, b| key(a) < key(b));
+        return;
+    }
+    let (mut lo, mut hi) = (u64::MAX, 0u64);
+    for p in v.iter() {
+        lo = lo.min(key(p));
+        hi = hi.max(key(p));
+    }
+    // The shift that leaves at most `BUCKETS` ranges of the span.
+    let span_bits = u64::BITS - (hi - lo).leading_zeros();
+    let shift = span_bits.saturating_sub(BUCKETS.trailing_zeros());
+    // `(k − lo) >> shift < BUCKETS` for every key in [lo, hi]; `min` keeps it in range.
+    let bucket = |p: &(u32, u32)| (((key(p) - lo) >> shift) as usize).min(BUCKETS - 1);
+    let mut end = [0usize; BUCKETS];
+    for p in v.iter() {
+        if let Some(e) = end.get_mut(bucket(p)) {
+            *e += 1;
+        }
+    }
+    // Running sums: `end[b]` is where range `b` ends, `next[b]` its write position.
+    let mut next = [0usize; BUCKETS];
+    let mut at = 0usize;
+    for (e, n) in end.iter_mut().zip(next.iter_mut()) {
+        *n = at;
+        at += *e;
+        *e = at;
+    }
+    let start = next;
+    distribute(v, &mut next, &end, bucket);
+    for (&s, &e) in start.iter().zip(end.iter()) {
+        let Some(range) = v.get_mut(s..e) else {
+            continue;
+        };
+        if range.len() <= INSERTION_MAX {
+            insertion_sort_by(range, |a, b| key(a) < key(b));
+        } else {
+            sort_unstable_by(range, |a, b| key(a) < key(b));
+        }
+    }
+}
+
+/// Ranges of [`sort_pairs`]' bucket pass (a power of two).
+const BUCKETS: usize = 256;
+
+/// Longest range [`sort_pairs`] sorts by insertion (at most `INSERTION_MAX²/2` moves).
+const INSERTION_MAX: usize = 24;
+
+/// Move every element of `v` into its bucket's range: range `b` is `[start_b, end[b])`
+/// with `next[b] = start_b` on entry. Each round either finds the element at a range's
+/// write position already home (the position advances) or swaps it into its own range
+/// (whose position advances): at most `2 n` rounds.
+fn distribute<T>(
+    v: &mut [T],
+    next: &mut [usize; BUCKETS],
+    end: &[usize; BUCKETS],
+    bucket: impl Fn(&T) -> usize,
+) {
+    let mut b = 0usize;
+    for _ in 0..v.len().saturating_mul(2).saturating_add(BUCKETS) {
+        // The first range with elements still to place, from `b` on.
+        while b < BUCKETS && next.get(b) >= end.get(b) {
+            b += 1;
+        }
+        let (Some(&at), true) = (next.get(b), b < BUCKETS) else {
+            return;
+        };
+        let Some(home) = v.get(at).map(&bucket) else {
+            return;
+        };
+        let Some(to) = next.get_mut(home) else {
+            return;
+        };
+        if home == b {
+            *to += 1;
+        } else {
+            let dst = *to;
+            *to += 1;
+            swap(v, at, dst);
+        }
+    }
+}
+
+/// Sort a short `v` by insertion (stable, O(n²) compares: for short ranges only).
+fn insertion_sort_by<T: Copy>(v: &mut [T], less: impl Fn(&T, &T) -> bool) {
+    for i in 1..v.len() {
+        let Some(&x) = v.get(i) else {
+            return;
+        };
+        let mut j = i;
+        while j > 0 {
+            match v.get(j - 1) {
+                Some(prev) if less(&x, prev) => {
+                    let prev = *prev;
+                    if let Some(slot) = v.get_mut(j) {
+                        *slot = prev;
+                    }
+                    j -= 1;
+                }
+                _ => break,
+            }
+        }
+        if let Some(slot) = v.get_mut(j) {
+            *slot = x;
+        }
+    }
 }
 
 /// Sort `v` so that no element is `less` than the one before it. `less` must be a strict
@@ -143,6 +257,62 @@ mod tests {
                 sort_unstable(&mut v);
                 assert_eq!(v, want, "n {n} pattern {pattern}");
             }
+        }
+    }
+
+    #[test]
+    fn sort_pairs_matches_core_on_random_skewed_and_duplicate_keys() {
+        let mut rng = SplitMix64::new(11);
+        for n in [0usize, 1, 2, 24, 25, 26, 100, 257, 1000, 5000] {
+            for pattern in 0..8 {
+                let mut v: std::vec::Vec<(u32, u32)> = (0..n)
+                    .map(|i| {
+                        let r = rng.next_u64();
+                        match pattern {
+                            // The solver's keys: a class bit over a 31-bit hash.
+                            0 => ((r as u32 & 1) << 31 | (r >> 33) as u32, i as u32),
+                            // The broad phase's slot pairs.
+                            1 => ((r % 300) as u32, (r >> 32) as u32 % 1000),
+                            // One body in every pair: one range holds them all.
+                            2 => (3, (r % 5000) as u32),
+                            // Duplicates only.
+                            3 => (9, 9),
+                            // The whole key range, extremes included.
+                            4 => match i % 3 {
+                                0 => (u32::MAX, u32::MAX),
+                                1 => (0, 0),
+                                _ => (r as u32, (r >> 32) as u32),
+                            },
+                            // Skewed: most keys in one range, a few far away.
+                            5 => {
+                                if i % 50 == 0 {
+                                    (u32::MAX - i as u32, 0)
+                                } else {
+                                    (0, (r % 40) as u32)
+                                }
+                            }
+                            6 => ((n - i) as u32, 0),
+                            _ => (i as u32, (n - i) as u32),
+                        }
+                    })
+                    .collect();
+                let mut want = v.clone();
+                want.sort_unstable();
+                sort_pairs(&mut v);
+                assert_eq!(v, want, "n {n} pattern {pattern}");
+            }
+        }
+    }
+
+    #[test]
+    fn insertion_sort_matches_core() {
+        let mut rng = SplitMix64::new(3);
+        for n in 0..30usize {
+            let mut v: std::vec::Vec<u64> = (0..n).map(|_| rng.next_u64() % 10).collect();
+            let mut want = v.clone();
+            want.sort_unstable();
+            insertion_sort_by(&mut v, |a, b| a < b);
+            assert_eq!(v, want, "n {n}");
         }
     }
 
