@@ -504,6 +504,12 @@ fn finalize<const N: usize, const C: usize>(
 /// the documented answer.
 #[inline]
 pub(crate) fn clamp_length(v: Vec3, max: f32) -> Vec3 {
+    // The common case first: a finite vector within the limit comes back as it is (what
+    // the full path below returns for it too).
+    let l2 = v.length_squared();
+    if l2 <= max * max && l2.is_finite() {
+        return v;
+    }
     if !v.is_finite() {
         return Vec3::ZERO;
     }
@@ -590,5 +596,38 @@ mod tests {
             place_in_colour_order(&mut scratch, &count);
             assert_eq!(scratch.as_slice(), want.as_slice(), "n {n}");
         }
+    }
+
+    /// The speed limit: within it a vector comes back bit for bit, beyond it it is
+    /// shortened to the limit in its own direction, and anything non-finite is zero.
+    #[test]
+    fn clamp_length_keeps_short_vectors_and_shortens_long_ones() {
+        let mut rng = SplitMix64::new(5);
+        let max = 100.0f32;
+        for _ in 0..2000 {
+            let mut c = || (rng.next_u64() % 20_001) as f32 * 0.01 - 100.0;
+            let v = Vec3::new(c(), c(), c());
+            let out = clamp_length(v, max);
+            if v.length_squared() <= max * max {
+                assert_eq!(out, v);
+            } else {
+                assert!(
+                    (out.length() - max).abs() <= 1.0e-4 * max,
+                    "{v:?} -> {out:?}"
+                );
+                assert!(out.dot(v) > 0.0 && out.cross(v).length() <= 1.0e-3 * v.length() * max);
+            }
+        }
+        // Too large to square in f32: scaled by its largest component first.
+        let huge = clamp_length(Vec3::new(3.0e38, -3.0e38, 1.0), max);
+        assert!((huge.length() - max).abs() <= 1.0e-3, "{huge:?}");
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            assert_eq!(clamp_length(Vec3::new(1.0, bad, 0.0), max), Vec3::ZERO);
+        }
+        // Exactly at the limit: unchanged.
+        assert_eq!(
+            clamp_length(Vec3::new(0.0, -max, 0.0), max),
+            Vec3::new(0.0, -max, 0.0)
+        );
     }
 }
