@@ -612,6 +612,7 @@ fn pair_reach(body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> f32 {
 
 /// The plan of contact `c`'s narrow phase, its margin grown by the pair's `reach`
 /// ([`pair_reach`]); `None` for a part key that names no part.
+#[inline(always)]
 fn plan<'a>(
     c: &Contact,
     body_a: &Body<'a>,
