@@ -17,30 +17,51 @@ pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
 /// Sort pairs of `u32` ascending (as tuples compare: first, then second), comparing each
 /// pair as one `u64` key.
 ///
-/// One bucket pass, then a small sort per bucket: the keys' span `max − min` is cut into
-/// [`BUCKETS`] ranges by its top significant bits, each pair is moved into its range in
-/// place (a cycle walk: every swap puts one pair where it belongs, at most `n` swaps),
-/// and each range is sorted by insertion when it holds at most [`INSERTION_MAX`] pairs,
-/// by the heapsort otherwise (so the worst case stays O(n log n)). The solver's hashed
-/// keys and the broad phase's slot pairs spread over the ranges, so most hold a few
-/// pairs: about a tenth of the heapsort's work for a thousand contacts. The result is
-/// the one sorted order of the keys, whichever way it was reached.
+/// Bucket passes, then a small sort per bucket: the keys' span `max − min` is cut into
+/// ranges by its top significant bits (about one range per two pairs, at most
+/// [`BUCKETS`]), each pair is moved into its range in place (a cycle walk: every swap
+/// puts one pair where it belongs, at most `n` swaps), and each range is sorted by
+/// insertion when it holds at most [`INSERTION_MAX`] pairs, by a second bucket pass over
+/// its own span when it holds more, and by the heapsort past [`BUCKET_LEVELS`] passes
+/// (so the worst case stays O(n log n)). The solver's hashed keys and the broad phase's
+/// slot pairs spread over the ranges, so most hold a few pairs. The result is the one
+/// sorted order of the keys, whichever way it was reached.
 pub(crate) fn sort_pairs(v: &mut [(u32, u32)]) {
-    let key = |p: &(u32, u32)| (u64::from(p.0) << 32) | u64::from(p.1);
+    sort_keys_from(v, 0);
+}
+
+/// The key [`sort_pairs`] orders by.
+#[inline]
+fn pair_key(p: &(u32, u32)) -> u64 {
+    (u64::from(p.0) << 32) | u64::from(p.1)
+}
+
+/// [`sort_pairs`] at bucket pass `level` (0 for the whole slice).
+fn sort_keys_from(v: &mut [(u32, u32)], level: u32) {
+    let less = |a: &(u32, u32), b: &(u32, u32)| pair_key(a) < pair_key(b);
     if v.len() <= INSERTION_MAX {
-        insertion_sort_by(v, |a, b| key(a) < key(b));
+        insertion_sort_by(v, less);
+        return;
+    }
+    if level >= BUCKET_LEVELS {
+        sort_unstable_by(v, less);
         return;
     }
     let (mut lo, mut hi) = (u64::MAX, 0u64);
     for p in v.iter() {
-        lo = lo.min(key(p));
-        hi = hi.max(key(p));
+        lo = lo.min(pair_key(p));
+        hi = hi.max(pair_key(p));
     }
-    // The shift that leaves at most `BUCKETS` ranges of the span.
+    // About one range per two keys, at most `BUCKETS`, and the shift that cuts the span
+    // into that many.
+    let bits = (usize::BITS - v.len().leading_zeros())
+        .saturating_sub(1)
+        .clamp(1, BUCKETS.trailing_zeros());
+    let ranges = 1usize << bits;
     let span_bits = u64::BITS - (hi - lo).leading_zeros();
-    let shift = span_bits.saturating_sub(BUCKETS.trailing_zeros());
-    // `(k − lo) >> shift < BUCKETS` for every key in [lo, hi]; `min` keeps it in range.
-    let bucket = |p: &(u32, u32)| (((key(p) - lo) >> shift) as usize).min(BUCKETS - 1);
+    let shift = span_bits.saturating_sub(bits);
+    // `(k − lo) >> shift < ranges` for every key in [lo, hi]; `min` keeps it in range.
+    let bucket = |p: &(u32, u32)| (((pair_key(p) - lo) >> shift) as usize).min(ranges - 1);
     let mut end = [0usize; BUCKETS];
     for p in v.iter() {
         if let Some(e) = end.get_mut(bucket(p)) {
@@ -50,48 +71,54 @@ pub(crate) fn sort_pairs(v: &mut [(u32, u32)]) {
     // Running sums: `end[b]` is where range `b` ends, `next[b]` its write position.
     let mut next = [0usize; BUCKETS];
     let mut at = 0usize;
-    for (e, n) in end.iter_mut().zip(next.iter_mut()) {
+    for (e, n) in end.iter_mut().zip(next.iter_mut()).take(ranges) {
         *n = at;
         at += *e;
         *e = at;
     }
-    let start = next;
-    distribute(v, &mut next, &end, bucket);
-    for (&s, &e) in start.iter().zip(end.iter()) {
-        let Some(range) = v.get_mut(s..e) else {
-            continue;
-        };
-        if range.len() <= INSERTION_MAX {
-            insertion_sort_by(range, |a, b| key(a) < key(b));
-        } else {
-            sort_unstable_by(range, |a, b| key(a) < key(b));
+    distribute(v, &mut next, &end, ranges, bucket);
+    // Range `b` starts where range `b − 1` ends. A range of equal keys is sorted.
+    let mut s = 0usize;
+    for &e in end.iter().take(ranges) {
+        let range = v.get_mut(s..e);
+        s = e;
+        if let (Some(range), true) = (range, shift > 0) {
+            sort_keys_from(range, level + 1);
         }
     }
 }
 
+/// Bucket passes [`sort_pairs`] makes before the heapsort takes over (each pass keeps two
+/// arrays of [`BUCKETS`] positions on the stack).
+const BUCKET_LEVELS: u32 = 2;
+
 /// Ranges of [`sort_pairs`]' bucket pass (a power of two).
 const BUCKETS: usize = 256;
 
-/// Longest range [`sort_pairs`] sorts by insertion (at most `INSERTION_MAX²/2` moves).
-const INSERTION_MAX: usize = 24;
+/// Longest range [`sort_pairs`] sorts by insertion (at most `INSERTION_MAX²/2` moves, no
+/// more than the heapsort's swaps and compares at this length; a random range of a few
+/// dozen takes a quarter of that).
+const INSERTION_MAX: usize = 64;
 
-/// Move every element of `v` into its bucket's range: range `b` is `[start_b, end[b])`
-/// with `next[b] = start_b` on entry. Each round either finds the element at a range's
+/// Move every element of `v` into its bucket's range: range `b < ranges` is
+/// `[start_b, end[b])` with `next[b] = start_b` on entry. Each round either finds the element at a range's
 /// write position already home (the position advances) or swaps it into its own range
 /// (whose position advances): at most `2 n` rounds.
 fn distribute<T>(
     v: &mut [T],
     next: &mut [usize; BUCKETS],
     end: &[usize; BUCKETS],
+    ranges: usize,
     bucket: impl Fn(&T) -> usize,
 ) {
+    let ranges = ranges.min(BUCKETS);
     let mut b = 0usize;
     for _ in 0..v.len().saturating_mul(2).saturating_add(BUCKETS) {
         // The first range with elements still to place, from `b` on.
-        while b < BUCKETS && next.get(b) >= end.get(b) {
+        while b < ranges && next.get(b) >= end.get(b) {
             b += 1;
         }
-        let (Some(&at), true) = (next.get(b), b < BUCKETS) else {
+        let (Some(&at), true) = (next.get(b), b < ranges) else {
             return;
         };
         let Some(home) = v.get(at).map(&bucket) else {
@@ -263,8 +290,8 @@ mod tests {
     #[test]
     fn sort_pairs_matches_core_on_random_skewed_and_duplicate_keys() {
         let mut rng = SplitMix64::new(11);
-        for n in [0usize, 1, 2, 24, 25, 26, 100, 257, 1000, 5000] {
-            for pattern in 0..8 {
+        for n in [0usize, 1, 2, 64, 65, 66, 100, 257, 1000, 5000, 20000] {
+            for pattern in 0..9 {
                 let mut v: std::vec::Vec<(u32, u32)> = (0..n)
                     .map(|i| {
                         let r = rng.next_u64();
@@ -291,7 +318,16 @@ mod tests {
                                     (0, (r % 40) as u32)
                                 }
                             }
-                            6 => ((n - i) as u32, 0),
+                            // Two dense clusters past the first two passes: the
+                            // heapsort sorts them.
+                            6 => {
+                                if i % 50 == 0 {
+                                    (u32::MAX - i as u32, 0)
+                                } else {
+                                    ((r % 2) as u32, (r >> 32) as u32)
+                                }
+                            }
+                            7 => ((n - i) as u32, 0),
                             _ => (i as u32, (n - i) as u32),
                         }
                     })
