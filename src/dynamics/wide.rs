@@ -25,6 +25,12 @@
 //! exactly the scalar rows of `contact_solver.rs` (same operations, same order), so the
 //! answer does not depend on whether the compiler vectorised the lanes, and the solve
 //! order (colours, then groups, then lanes) is the same on every target.
+//!
+//! A point row past a contact's points is empty (zero mass, zero impulse) and pushes
+//! nothing, so a full group whose contacts all have a single point (spheres, capsule
+//! ends, corners) runs a kernel of one point row instead of four: the same velocities
+//! (an empty row can at most turn a velocity component of −0 into +0) for a third of
+//! the work.
 
 use heapless::Vec as HVec;
 
@@ -193,11 +199,11 @@ impl<const C: usize> WideStore<C> {
         }
     }
 
-    /// Room for `groups` groups, every lane marked empty; false when the store cannot
-    /// hold them. Slots kept from the last step keep their old numbers: a lane is written
-    /// whole when a constraint is stored in it, and an empty lane is never in a pass's
-    /// mask, so what it holds never reaches a body (lanes do not mix). Only slots new to
-    /// the store are zeroed.
+    /// Room for `groups` groups, every lane marked empty (no contact, no points); false
+    /// when the store cannot hold them. Slots kept from the last step keep their old
+    /// numbers: a lane is written whole when a constraint is stored in it, and an empty
+    /// lane is never in a pass's mask, so what it holds never reaches a body (lanes do not
+    /// mix). Only slots new to the store are zeroed.
     pub fn reset(&mut self, groups: usize) -> bool {
         self.groups = 0;
         self.overflow_from = 0;
@@ -215,6 +221,7 @@ impl<const C: usize> WideStore<C> {
                 group.s0.idx = [NONE; 4];
                 group.s1.idx = [NONE; 4];
                 group.s2.idx = [NONE; 4];
+                group.s3.idx = [0; 4];
             }
         }
         self.groups = groups as u32;
@@ -260,6 +267,15 @@ impl Group<'_> {
     /// The contact index of lane `l`, or [`NONE`] for an empty lane.
     pub fn contact(&self, l: usize) -> u32 {
         self.s2.idx.get(l).copied().unwrap_or(NONE)
+    }
+
+    /// The most points any contact of the group has: the point rows past it are empty in
+    /// every lane (module docs).
+    #[inline(always)]
+    fn point_rows(&self) -> usize {
+        // An empty lane's flags are 0 (`WideStore::reset`).
+        let [f0, f1, f2, f3] = self.s3.idx.map(|f| f & 0xff);
+        (f0.max(f1).max(f2.max(f3)) as usize).min(4)
     }
 
     /// Lanes holding a contact.
@@ -549,7 +565,7 @@ struct NormalReach {
 }
 
 impl NormalReach {
-    #[inline]
+    #[inline(always)]
     fn gather(b: &[&SolverBody; 4], n: &V4) -> NormalReach {
         NormalReach {
             along: n.dot(&lanes3(b, |b| b.dp)),
@@ -621,25 +637,32 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
             break;
         };
         let (masks, n) = passes(&group, overflow);
+        let rows = group.point_rows();
         for mask in masks.iter().take(n) {
-            if *mask == ALL_LANES {
-                warm_start_group(&mut group, bodies, ALL_LANES);
-            } else {
-                warm_start_group(&mut group, bodies, *mask);
+            // As in `solve`: the common full group of four-point contacts gets its own
+            // copy of the kernel.
+            match (*mask == ALL_LANES, rows) {
+                (true, 1) => warm_start_group::<1>(&mut group, bodies, ALL_LANES),
+                (true, _) => warm_start_group::<4>(&mut group, bodies, ALL_LANES),
+                _ => warm_start_group::<4>(&mut group, bodies, *mask),
             }
         }
     }
 }
 
 #[inline(always)]
-fn warm_start_group(group: &mut Group<'_>, bodies: &mut [SolverBody], mask: [bool; 4]) {
+fn warm_start_group<const ROWS: usize>(
+    group: &mut Group<'_>,
+    bodies: &mut [SolverBody],
+    mask: [bool; 4],
+) {
     let ia = group.s0.idx;
     let ib = group.s1.idx;
     let mut a = Bodies4::gather(bodies, &ia);
     let mut b = Bodies4::gather(bodies, &ib);
     let keep = |x: F4| F4::ZERO.select_where(mask, x);
     let shared = Shared::load(&group.s0.s);
-    for j in 0..4 {
+    for j in 0..ROWS {
         let p = &group.point(j);
         let lambda = keep(p.normal_impulse);
         let jn = shared.n.scale(lambda);
@@ -741,13 +764,16 @@ pub(crate) fn solve<const C: usize>(
             break;
         };
         let (masks, n) = passes(&group, overflow);
+        let rows = group.point_rows();
         for mask in masks.iter().take(n) {
             // A full group (every coloured group but the last) gets its own copy of the
-            // kernel, where the lane selects fold away.
-            if *mask == ALL_LANES {
-                solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, ALL_LANES);
-            } else {
-                solve_group(&mut group, bodies, cfg, inv_h, use_bias, last, *mask);
+            // kernel, where the lane selects fold away, and a full group of four-point
+            // contacts (face on face) one where the point loop unrolls.
+            let (g, bodies) = (&mut group, &mut *bodies);
+            match (*mask == ALL_LANES, rows) {
+                (true, 1) => solve_group::<1>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
+                (true, _) => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
+                _ => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, *mask),
             }
         }
     }
@@ -755,7 +781,7 @@ pub(crate) fn solve<const C: usize>(
 
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn solve_group(
+fn solve_group<const ROWS: usize>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
     cfg: &WorldConfig,
@@ -788,7 +814,7 @@ fn solve_group(
     let inv_h = F4::splat(inv_h);
     let mut total = zero;
     let mut levers = zero;
-    for j in 0..4 {
+    for j in 0..ROWS {
         let p = group.point_mut(j);
         // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
         //   = adjusted + (n·Δp_b − n·Δp_a) + ((R_bᵀ n)·l_b − (R_aᵀ n)·l_a)
