@@ -27,8 +27,10 @@
 //!   creation and relies on periodic rebuilds; here every insertion, moves included,
 //!   rotates, and there is no rebuild).
 //! - **Removal** replaces the leaf's parent by the leaf's sibling and refits the
-//!   ancestors' boxes and heights. **Moving** a proxy is a removal and an insertion; the
-//!   proxy keeps its id.
+//!   ancestors' boxes and heights. **Moving** a proxy to a box inside its parent's box
+//!   keeps its place and refits the ancestors (up to the first box the refit does not
+//!   change): the box still belongs under that parent, and the search and rotations are
+//!   saved. Any other move is a removal and an insertion. The proxy keeps its id.
 //!
 //! # Capacity and bounds
 //!
@@ -196,11 +198,22 @@ impl<const N: usize> AabbTree<N> {
         true
     }
 
-    /// Give a proxy a new box: removed and inserted again, keeping its id. False (and no
+    /// Give a proxy a new box: refitted in place when the box stays inside its parent's,
+    /// else removed and inserted again (module docs), keeping its id. False (and no
     /// change) when `proxy` is not one.
     pub fn move_proxy(&mut self, proxy: u32, aabb: Aabb) -> bool {
         if !self.is_leaf(proxy) {
             return false;
+        }
+        // A box that stays inside its parent's keeps its place: the ancestors are refitted
+        // (up to the first one whose box does not change), no search, no rotation.
+        let parent = self.node(proxy).map_or(NULL, |n| n.parent);
+        if self.node(parent).is_some_and(|p| p.aabb.contains(&aabb)) {
+            if let Some(n) = self.node_mut(proxy) {
+                n.aabb = aabb;
+            }
+            self.refit_until_unchanged(parent);
+            return true;
         }
         self.remove_leaf(proxy);
         if let Some(n) = self.node_mut(proxy) {
@@ -390,6 +403,28 @@ impl<const N: usize> AabbTree<N> {
             n.aabb = c1.aabb.union(&c2.aabb);
             n.height = c1.height.max(c2.height).saturating_add(1);
             n.category = c1.category | c2.category;
+        }
+    }
+
+    /// Refit `start` and its ancestors, up to the first whose box, height and categories
+    /// the refit leaves as they were (above it nothing changes).
+    fn refit_until_unchanged(&mut self, start: u32) {
+        let mut at = start;
+        for _ in 0..=Self::NODES {
+            let Some(&before) = self.node(at) else {
+                return;
+            };
+            if before.kind != Kind::Internal {
+                return;
+            }
+            self.refit(at);
+            let unchanged = self.node(at).is_some_and(|n| {
+                n.aabb == before.aabb && n.height == before.height && n.category == before.category
+            });
+            if unchanged {
+                return;
+            }
+            at = before.parent;
         }
     }
 
@@ -758,9 +793,12 @@ mod tests {
                             assert!(!tree.remove(p), "removed twice");
                             live[user as usize] = None;
                         } else {
-                            // Mostly small moves, sometimes a jump.
+                            // Mostly small moves, sometimes a jump, sometimes a
+                            // shrink (inside the parent's box: refitted in place).
                             let b = if rng.next_u64().is_multiple_of(4) {
                                 random_box(&mut rng, spread)
+                            } else if rng.next_u64().is_multiple_of(3) {
+                                Aabb::from_center_half(old.center(), old.half_extents() * 0.5)
                             } else {
                                 let d = Vec3::new(
                                     rng.range(-0.5, 0.5),
