@@ -28,9 +28,9 @@
 //!
 //! A point row past a contact's points is empty (zero mass, zero impulse) and pushes
 //! nothing, so a full group whose contacts all have a single point (spheres, capsule
-//! ends, corners) runs a kernel of one point row instead of four: the same velocities
-//! (an empty row can at most turn a velocity component of −0 into +0) for a third of
-//! the work.
+//! ends, corners) runs a kernel of one point row instead of four, and one whose contacts
+//! have at most two (edges, capsules lying down) a kernel of two: the same velocities
+//! (an empty row can at most turn a velocity component of −0 into +0) for less work.
 
 use heapless::Vec as HVec;
 
@@ -643,6 +643,7 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
             // copy of the kernel.
             match (*mask == ALL_LANES, rows) {
                 (true, 1) => warm_start_group::<1>(&mut group, bodies, ALL_LANES),
+                (true, 2) => warm_start_group::<2>(&mut group, bodies, ALL_LANES),
                 (true, _) => warm_start_group::<4>(&mut group, bodies, ALL_LANES),
                 _ => warm_start_group::<4>(&mut group, bodies, *mask),
             }
@@ -772,6 +773,7 @@ pub(crate) fn solve<const C: usize>(
             let (g, bodies) = (&mut group, &mut *bodies);
             match (*mask == ALL_LANES, rows) {
                 (true, 1) => solve_group::<1>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
+                (true, 2) => solve_group::<2>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
                 (true, _) => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
                 _ => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, *mask),
             }
