@@ -266,12 +266,24 @@ mod tests {
     use super::*;
     use crate::rng::SplitMix64;
 
+    /// `sort` puts `v` in the order `core`'s sort gives.
+    fn assert_sorts_like_core(
+        mut v: std::vec::Vec<(u32, u32)>,
+        sort: fn(&mut [(u32, u32)]),
+        case: &str,
+    ) {
+        let mut want = v.clone();
+        want.sort_unstable();
+        sort(&mut v);
+        assert_eq!(v, want, "{case}");
+    }
+
     #[test]
     fn sorts_like_core_on_random_and_adversarial_inputs() {
         let mut rng = SplitMix64::new(7);
         for n in [0usize, 1, 2, 3, 7, 16, 100, 1000] {
             for pattern in 0..4 {
-                let mut v: std::vec::Vec<(u32, u32)> = (0..n)
+                let v: std::vec::Vec<(u32, u32)> = (0..n)
                     .map(|i| match pattern {
                         0 => ((rng.next_u64() % 50) as u32, i as u32),
                         1 => (i as u32, 0),
@@ -279,10 +291,7 @@ mod tests {
                         _ => (7, i as u32),
                     })
                     .collect();
-                let mut want = v.clone();
-                want.sort_unstable();
-                sort_unstable(&mut v);
-                assert_eq!(v, want, "n {n} pattern {pattern}");
+                assert_sorts_like_core(v, sort_unstable, &std::format!("n {n} pattern {pattern}"));
             }
         }
     }
@@ -292,7 +301,7 @@ mod tests {
         let mut rng = SplitMix64::new(11);
         for n in [0usize, 1, 2, 64, 65, 66, 100, 257, 1000, 5000, 20000] {
             for pattern in 0..9 {
-                let mut v: std::vec::Vec<(u32, u32)> = (0..n)
+                let v: std::vec::Vec<(u32, u32)> = (0..n)
                     .map(|i| {
                         let r = rng.next_u64();
                         match pattern {
@@ -332,10 +341,7 @@ mod tests {
                         }
                     })
                     .collect();
-                let mut want = v.clone();
-                want.sort_unstable();
-                sort_pairs(&mut v);
-                assert_eq!(v, want, "n {n} pattern {pattern}");
+                assert_sorts_like_core(v, sort_pairs, &std::format!("n {n} pattern {pattern}"));
             }
         }
     }
