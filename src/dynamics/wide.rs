@@ -639,8 +639,8 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
         let (masks, n) = passes(&group, overflow);
         let rows = group.point_rows();
         for mask in masks.iter().take(n) {
-            // As in `solve`: the common full group of four-point contacts gets its own
-            // copy of the kernel.
+            // As in `solve`: full groups get their own copies of the kernel, with one,
+            // two or four point rows.
             match (*mask == ALL_LANES, rows) {
                 (true, 1) => warm_start_group::<1>(&mut group, bodies, ALL_LANES),
                 (true, 2) => warm_start_group::<2>(&mut group, bodies, ALL_LANES),
@@ -768,8 +768,8 @@ pub(crate) fn solve<const C: usize>(
         let rows = group.point_rows();
         for mask in masks.iter().take(n) {
             // A full group (every coloured group but the last) gets its own copy of the
-            // kernel, where the lane selects fold away, and a full group of four-point
-            // contacts (face on face) one where the point loop unrolls.
+            // kernel, where the lane selects fold away, with one, two or four point rows
+            // (module docs); the point loop unrolls in each.
             let (g, bodies) = (&mut group, &mut *bodies);
             match (*mask == ALL_LANES, rows) {
                 (true, 1) => solve_group::<1>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
