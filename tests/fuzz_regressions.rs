@@ -1468,3 +1468,70 @@ fn deepest_points_of_touching_cores_may_slide_along_the_edge() {
     // The depth is the radius: the centre is on the edge.
     assert!((p.depth - 0.015258789).abs() < 1e-6, "{p:?}");
 }
+
+/// Root cause: GJK's f32 loop stopped on "no progress" with the support along `−v`
+/// clearly past the origin, and read that as "apart" unless `v` was within the direction
+/// tolerance of the origin. With a metres-long simplex whose closest point is a fraction
+/// of a millimetre from the origin, `v`'s direction carries the rounding of the vertices
+/// (an ulp of 8 m over 0.24 mm: 2e-3 rad), the support along it lands on a far vertex
+/// past the origin, and the sub-algorithm, rounding the same way, drops it: the cores were
+/// called apart while overlapping by millimetres, in one argument order only. A sphere's
+/// centre 3.5 mm inside an 8 m plate 7.6 mm thick (f50bc49a: the depth was the radius
+/// alone, 3.8 mm short); two 3.3 m boxes 7.6 mm deep read as 0.24 mm apart (5c2ee9ea);
+/// a 1.5 cm sphere against a hull with coordinates of 1e-12 to 1e-44 m next to metres
+/// (d78939cf: a depth along which moving the sphere out did not separate). Reading every
+/// such stop as overlap broke the opposite case (a11fe352 above: a sphere 1.2 mm over a
+/// thin box, truly apart). Fix (`collide::gjk_f64`): such an undecided stop continues
+/// the search from its simplex with the closest point computed in f64 from the same f32
+/// vertices, exact for the polytopes they describe.
+#[test]
+fn gjk_refines_an_undecided_stop_in_f64() {
+    // plate-through-a-sphere-core-f50bc49a (narrow_phase, CI's fixed-seed run at fa3945a).
+    let a = Shape::sphere(3.8902588).unwrap();
+    let pa = Iso::new(
+        Vec3::new(-0.00024414063, 0.0, 1.44055e-40),
+        Quat::from_xyzw(0.5538662, 0.55383146, 0.28244224, 0.55383146),
+    );
+    let b = Shape::cuboid(Vec3::new(0.0037841797, 7.984009, 3.8902588)).unwrap();
+    let pb = Iso::IDENTITY;
+    // big-boxes-tilted-normal-5c2ee9ea (narrow_phase, a long run at cd1e567).
+    let cube = Shape::cuboid(Vec3::splat(3.2941895)).unwrap();
+    let pc = Iso::new(Vec3::splat(6.588135), Quat::from_xyzw(0.5, 0.5, 0.5, 0.5));
+    let pd = Iso::new(
+        Vec3::new(-0.00048828125, 6.588135, 6.588135),
+        Quat::from_xyzw(0.4991098, 0.50029635, 0.50029635, 0.50029635),
+    );
+    // epa-depth-sphere-hull-d78939cf (narrow_phase, a long run at 8096638).
+    let s = Shape::sphere(0.015258789).unwrap();
+    let ps = Iso::new(
+        Vec3::new(0.0, 9.1e-44, 0.25),
+        Quat::from_xyzw(0.6680313, -0.11003178, -0.5164182, 0.5243468),
+    );
+    let h = hull(&[
+        Vec3::new(2.446725e-12, 0.0, 7.892334),
+        Vec3::new(1.138432e-39, 0.0, 2.5725098),
+        Vec3::new(0.0, 0.00024414063, -7.8125),
+        Vec3::new(0.030273438, 7.7802734, 5.2478027),
+        Vec3::new(5.2077637, 2.14e-43, 0.0),
+    ]);
+    let hull_shape = Shape::hull(&h);
+    assert_cases(&[
+        ("f50bc49a", a, pa, b, pb, 1.5258789e-5),
+        ("5c2ee9ea", cube, pc, cube, pd, 0.41177368),
+        ("d78939cf", s, ps, hull_shape, Iso::IDENTITY, 1.5258789e-5),
+    ]);
+    // The sphere's centre is 0.244 mm off the plate's middle plane: the depth is the
+    // radius plus the half thickness minus that offset, in both orders.
+    let expected = 3.8902588 + 0.0037841797 - 0.00024414063;
+    for (x, px, y, py) in [(&a, pa, &b, pb), (&b, pb, &a, pa)] {
+        let p = penetration(x, &px, y, &py).unwrap().unwrap();
+        assert!((p.depth - expected).abs() < 1.0e-6, "{p:?}");
+        assert_eq!(p.status, carom::collide::EpaStatus::Converged, "{p:?}");
+    }
+    // Both orders find the boxes overlapping by the depth an f64 separating axis test
+    // over the 15 axes gives (7.5686 mm).
+    for (px, py) in [(pc, pd), (pd, pc)] {
+        let s = carom::collide::separation(&cube, &px, &cube, &py).unwrap();
+        assert!((s.separation + 0.0075686).abs() < 2.0e-6, "{s:?}");
+    }
+}

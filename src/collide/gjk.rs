@@ -38,7 +38,7 @@
 //!
 //! A half-space has no support point: its pairs are closed forms.
 
-use super::{check_pose, Placement, Proxy};
+use super::{check_pose, gjk_f64, Placement, Proxy};
 use crate::error::Error;
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
@@ -844,7 +844,7 @@ fn fresh_start(pa: &Proxy, pb: &Proxy) -> Simplex {
 /// monotonic in the gap down to rounding instead of dropping to 0 below a threshold.
 /// False for NaN.
 #[inline]
-fn touches_origin(v: Vec3, count: usize, size2: f32) -> bool {
+pub(super) fn touches_origin(v: Vec3, count: usize, size2: f32) -> bool {
     let tol2 = GJK_OVERLAP_TOLERANCE * GJK_OVERLAP_TOLERANCE;
     let vv = v.length_squared();
     vv <= GJK_NO_DIRECTION || (count < 3 && vv <= tol2 * size2)
@@ -878,6 +878,17 @@ fn direction_is_ambiguous(v: Vec3, count: usize, size2: f32) -> bool {
     count < 3 && v.length_squared() <= tol2 * size2
 }
 
+/// How a stop of the GJK loop ends (see `gjk_cores`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Stop {
+    /// No support beyond the origin: the cores are apart.
+    Separated,
+    /// A support past the origin with `v` within rounding of it: they overlap.
+    Overlapping,
+    /// A support past the origin with `v` farther: f32 cannot tell (`gjk_f64::refine`).
+    Undecided,
+}
+
 /// GJK between two cores with signed volumes, warm-started from `cache` and writing the
 /// final simplex back to it.
 pub(crate) fn gjk_cores(
@@ -899,6 +910,7 @@ pub(crate) fn gjk_cores(
     let mut status = GjkStatus::IterationLimit;
     let mut iterations = 0;
     let mut plateau = 0;
+    let mut stop = None;
     while iterations < max_iterations {
         if simplex.count == 4 || touches_origin(v, simplex.count, size2) {
             status = GjkStatus::Overlapping;
@@ -919,22 +931,28 @@ pub(crate) fn gjk_cores(
         // apart, at the accurate `|v|`.
         let near_origin =
             v.length_squared() <= GJK_DIRECTION_TOLERANCE * GJK_DIRECTION_TOLERANCE * size2;
+        // A support past the origin farther from it (`!near_origin`) leaves the stop
+        // undecided: `gjk_f64::refine` continues from the simplex with exact closest
+        // points (fuzz findings `plate-through-a-sphere-core-f50bc49a`: overlapping,
+        // `sphere-over-a-thin-box-a11fe352`: apart).
         let apart = || {
-            if near_origin && beyond_origin(v_now, w.w) {
-                GjkStatus::Overlapping
+            if !beyond_origin(v_now, w.w) {
+                Stop::Separated
+            } else if near_origin {
+                Stop::Overlapping
             } else {
-                GjkStatus::Separated
+                Stop::Undecided
             }
         };
         // 1: the lower bound v·w/|v| is within the tolerance of the upper bound |v|.
         let gap = vv - v.dot(w.w);
         if gap <= GJK_RELATIVE_TOLERANCE * scalar::sqrt(vv) * w.w.length() {
-            status = apart();
+            stop = Some(apart());
             break;
         }
         // 2: nothing new on the boundary.
         if simplex.contains(&w) {
-            status = apart();
+            stop = Some(apart());
             break;
         }
         let mut grown = simplex;
@@ -955,19 +973,29 @@ pub(crate) fn gjk_cores(
             let rounding = GJK_ROUNDING * scalar::sqrt(vv * grown.max_w_squared());
             let progress = kept && vv_next <= vv + rounding;
             if !progress {
-                status = apart();
+                stop = Some(apart());
                 break;
             }
             plateau = if vv_next < vv { 0 } else { plateau + 1 };
             if plateau > GJK_MAX_PLATEAU {
                 simplex = next;
                 v = v_next;
-                status = apart();
+                stop = Some(apart());
                 break;
             }
         }
         simplex = next;
         v = v_next;
+    }
+    match stop {
+        Some(Stop::Separated) => status = GjkStatus::Separated,
+        Some(Stop::Overlapping) => status = GjkStatus::Overlapping,
+        Some(Stop::Undecided) => {
+            // At most `max_iterations` more supports, in f64.
+            (simplex, status) = gjk_f64::refine(pa, pb, &simplex, size2, max_iterations);
+            v = simplex.closest();
+        }
+        None => {}
     }
     if status == GjkStatus::IterationLimit
         && (simplex.count == 4 || touches_origin(v, simplex.count, size2))

@@ -17,6 +17,7 @@ pub(crate) mod analytic;
 mod clip;
 mod epa;
 mod gjk;
+mod gjk_f64;
 mod manifold;
 mod sat;
 mod separation;
