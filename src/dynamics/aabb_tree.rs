@@ -30,7 +30,10 @@
 //!   ancestors' boxes and heights. **Moving** a proxy to a box inside its parent's box
 //!   keeps its place and refits the ancestors (up to the first box the refit does not
 //!   change): the box still belongs under that parent, and the search and rotations are
-//!   saved. Any other move is a removal and an insertion. The proxy keeps its id.
+//!   saved. Any other move is a removal and an insertion below the lowest ancestor whose
+//!   box held the new box (the root when none did): the search and the rotations run
+//!   over that subtree only, and the ancestors above it are refitted up to the first box
+//!   that does not change. Removals refit the same way. The proxy keeps its id.
 //!
 //! # Capacity and bounds
 //!
@@ -178,7 +181,7 @@ impl<const N: usize> AabbTree<N> {
             category,
             kind: Kind::Leaf,
         })?;
-        if !self.insert_leaf(leaf) {
+        if !self.insert_leaf(leaf, self.root) {
             // Unreachable: fewer than `N` leaves leave a node for the new parent.
             self.release(leaf);
             return None;
@@ -215,11 +218,17 @@ impl<const N: usize> AabbTree<N> {
             self.refit_until_unchanged(parent);
             return true;
         }
+        // Else the search starts at the lowest ancestor whose box holds the new box (the
+        // root when none does), whose own ancestors need not grow: a proxy moving a
+        // little is settled near where it was, in a few levels instead of the whole
+        // height (the same branch and bound, over that subtree).
+        let top = self.lowest_holder(parent, &aabb);
         self.remove_leaf(proxy);
         if let Some(n) = self.node_mut(proxy) {
             n.aabb = aabb;
         }
-        if self.insert_leaf(proxy) {
+        let top = if top == NULL { self.root } else { top };
+        if self.insert_leaf(proxy, top) {
             return true;
         }
         // Unreachable: the removal freed the node the insertion needs. Drop the proxy
@@ -256,6 +265,12 @@ impl<const N: usize> AabbTree<N> {
             self.scan_leaves(NULL, aabb, mask, f);
             return;
         }
+        // Only nodes that match (category and box) are pushed: each is tested once, as a
+        // child, before it costs a push and a pop.
+        let matches = |n: &Node| n.category & mask != 0 && n.aabb.overlaps(aabb);
+        if !matches(root) {
+            return;
+        }
         let mut stack: HVec<u32, S> = HVec::new();
         let _ = stack.push(self.root);
         // Every node is pushed at most once.
@@ -268,13 +283,13 @@ impl<const N: usize> AabbTree<N> {
             let Some(n) = self.node(i) else {
                 continue;
             };
-            if n.category & mask == 0 || !n.aabb.overlaps(aabb) {
-                continue;
-            }
             match n.kind {
                 Kind::Leaf => f(n.child2),
                 Kind::Internal => {
                     for child in [n.child2, n.child1] {
+                        if !self.node(child).is_some_and(matches) {
+                            continue;
+                        }
                         if stack.push(child).is_err() {
                             self.scan_leaves(child, aabb, mask, f);
                         }
@@ -428,8 +443,10 @@ impl<const N: usize> AabbTree<N> {
         }
     }
 
-    /// Refit `start` and its ancestors up to the root, rotating each when `rotate`.
-    fn refit_upwards(&mut self, start: u32, rotate: bool) {
+    /// Refit and rotate `start` and its ancestors up to `stop` (included; the root when
+    /// `stop` is not on the path), then refit the ancestors above `stop` up to the first
+    /// the refit leaves as it was.
+    fn refit_and_rotate_up_to(&mut self, start: u32, stop: u32) {
         let mut at = start;
         // The path to the root is at most as long as the tree is high.
         for _ in 0..=Self::NODES {
@@ -441,19 +458,37 @@ impl<const N: usize> AabbTree<N> {
             }
             let parent = n.parent;
             self.refit(at);
-            if rotate {
-                // Rotations change what lies below `at`, never `at`'s place.
-                self.rotate(at);
+            // Rotations change what lies below `at`, never `at`'s place or box.
+            self.rotate(at);
+            if at == stop {
+                self.refit_until_unchanged(parent);
+                return;
             }
             at = parent;
         }
     }
 
+    /// The lowest of `start` and its ancestors whose box holds `aabb`; [`NULL`] when none
+    /// does.
+    fn lowest_holder(&self, start: u32, aabb: &Aabb) -> u32 {
+        let mut at = start;
+        for _ in 0..=Self::NODES {
+            match self.node(at) {
+                Some(n) if n.aabb.contains(aabb) => return at,
+                Some(n) => at = n.parent,
+                None => return NULL,
+            }
+        }
+        NULL
+    }
+
     // ----- insertion and removal -------------------------------------------------------
 
-    /// Hang the detached leaf `leaf` into the tree beside its best sibling (module docs);
-    /// false when no node is left for the new parent.
-    fn insert_leaf(&mut self, leaf: u32) -> bool {
+    /// Hang the detached leaf `leaf` into the tree beside its best sibling under `top`
+    /// (the root, or an ancestor whose box held the leaf's; module docs), rotating the
+    /// nodes from the new parent up to `top`'s place; false when no node is left for the
+    /// new parent.
+    fn insert_leaf(&mut self, leaf: u32, top: u32) -> bool {
         let Some(&l) = self.node(leaf) else {
             return false;
         };
@@ -462,7 +497,7 @@ impl<const N: usize> AabbTree<N> {
             self.root = leaf;
             return true;
         }
-        let sibling = self.best_sibling(&l.aabb);
+        let sibling = self.best_sibling(&l.aabb, top);
         let Some(&s) = self.node(sibling) else {
             return false;
         };
@@ -480,7 +515,10 @@ impl<const N: usize> AabbTree<N> {
         self.replace_child(s.parent, sibling, parent);
         self.set_parent(sibling, parent);
         self.set_parent(leaf, parent);
-        self.refit_upwards(parent, true);
+        // The new parent takes the sibling's place: when that was `top`'s, the parent is
+        // the last node to rotate.
+        let stop = if sibling == top { parent } else { top };
+        self.refit_and_rotate_up_to(parent, stop);
         true
     }
 
@@ -502,7 +540,7 @@ impl<const N: usize> AabbTree<N> {
         self.set_parent(sibling, p.parent);
         self.set_parent(leaf, NULL);
         self.release(parent);
-        self.refit_upwards(p.parent, false);
+        self.refit_until_unchanged(p.parent);
     }
 
     /// The node the new box `d` should become the sibling of: the least SAH cost, by
@@ -515,18 +553,18 @@ impl<const N: usize> AabbTree<N> {
     /// `inherited' + A(K ∪ D) + min(A(D) − A(K), 0)` (either `K` itself is the sibling,
     /// or `K` grows and a new parent of at least `A(D)` appears below it). Ties between
     /// two internal children's bounds (a box inside both) go to the nearer centre.
-    fn best_sibling(&self, d: &Aabb) -> u32 {
-        let Some(root) = self.node(self.root) else {
-            return self.root;
+    fn best_sibling(&self, d: &Aabb, top: u32) -> u32 {
+        let Some(root) = self.node(top) else {
+            return top;
         };
         let area_d = area(d);
         let center_d = d.center();
         let mut area_here = area(&root.aabb);
         let mut direct = area(&root.aabb.union(d));
         let mut inherited = 0.0f32;
-        let mut best = self.root;
+        let mut best = top;
         let mut best_cost = direct;
-        let mut at = self.root;
+        let mut at = top;
         for _ in 0..=Self::NODES {
             let Some(n) = self.node(at) else {
                 break;
@@ -867,6 +905,46 @@ mod tests {
         assert_eq!(tree.len(), 0);
         assert_eq!(answer(&tree, &extra, 1), Vec::<u32>::new());
         tree.validate().unwrap();
+    }
+
+    /// Proxies that drift (a falling grid of 512 boxes, each moving a random step of up to
+    /// a third of its size every round, so most moves leave the parent's box and are
+    /// reinserted below an ancestor) keep the tree as shallow as fresh insertions do, and
+    /// every query still matches the brute-force answer.
+    #[test]
+    fn drifting_proxies_keep_the_tree_shallow() {
+        const N: usize = 512;
+        let mut rng = SplitMix64::new(11);
+        let mut tree: AabbTree<N> = AabbTree::new();
+        let mut boxes = Vec::new();
+        for i in 0..N as u32 {
+            let c = Vec3::new((i % 8) as f32, ((i / 8) % 8) as f32, (i / 64) as f32);
+            let b = Aabb::from_center_half(c, Vec3::splat(0.6));
+            boxes.push((tree.insert(b, i, 1).unwrap(), b));
+        }
+        for round in 0..60 {
+            for (p, b) in boxes.iter_mut() {
+                let d = Vec3::new(
+                    rng.range(-0.2, 0.2),
+                    rng.range(-0.2, 0.2),
+                    rng.range(-0.4, 0.0),
+                );
+                *b = b.translated(d);
+                assert!(tree.move_proxy(*p, *b));
+            }
+            tree.validate()
+                .unwrap_or_else(|e| panic!("round {round}: {e}"));
+            assert!(
+                tree.height() <= 18,
+                "round {round}: height {}",
+                tree.height()
+            );
+            let q = random_box(&mut rng, 6.0);
+            let expected: Vec<u32> = (0..N as u32)
+                .filter(|&u| boxes[u as usize].1.overlaps(&q))
+                .collect();
+            assert_eq!(answer(&tree, &q, 1), expected, "round {round}");
+        }
     }
 
     /// Queries with stacks too small for the tree: with a stack of 2 the height check
