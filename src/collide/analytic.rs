@@ -163,6 +163,58 @@ pub(crate) fn sphere_sphere(
     m.non_empty()
 }
 
+/// Sphere `a` at `pose_a` against sphere `b` at `pose_b` (world frame, unit rotations), in
+/// closed form in the world frame: with `d = c_b − c_a`, the normal is `d / |d|` (`fallback`,
+/// unit, when the centres coincide), the separation `|d| − r_a − r_b`, and the points
+/// `c_a + r_a n`, `c_b − r_b n`. The answer is symmetric to the bit: swapping the spheres
+/// negates `d` exactly, so the normal flips and the points swap (the fallback is the
+/// caller's to keep symmetric). One point, written to `out`; false (and `out` unspecified)
+/// when apart by more than `margin` or when a number is not finite.
+pub(crate) fn sphere_sphere_world(
+    a: &Sphere,
+    pose_a: &Iso,
+    b: &Sphere,
+    pose_b: &Iso,
+    fallback: impl Fn() -> Vec3,
+    margin: f32,
+    out: &mut Manifold,
+) -> bool {
+    let d = pose_b.position - pose_a.position;
+    let (normal, distance) = d
+        .normalize_and_length()
+        .unwrap_or_else(|| (fallback(), 0.0));
+    let separation = distance - (a.radius + b.radius);
+    let within = separation <= margin; // false for NaN too
+    if !within {
+        return false;
+    }
+    let (on_a, on_b) = (normal * a.radius, normal * -b.radius);
+    let point = ManifoldPoint {
+        point_a: pose_a.position + on_a,
+        point_b: pose_b.position + on_b,
+        local_a: pose_a.inverse_transform_vector(on_a),
+        local_b: pose_b.inverse_transform_vector(on_b),
+        separation,
+        id: ContactId {
+            a: FeatureId::vertex(0),
+            b: FeatureId::vertex(0),
+        },
+    };
+    let finite = normal.is_finite()
+        && point.point_a.is_finite()
+        && point.point_b.is_finite()
+        && point.local_a.is_finite()
+        && point.local_b.is_finite()
+        && separation.is_finite();
+    if !finite {
+        return false;
+    }
+    out.normal = normal;
+    out.points[0] = point;
+    out.len = 1;
+    true
+}
+
 /// Sphere `a` at `pose_a` against box `b` at `pose_b` (world frame, unit rotations), in
 /// closed form in the box's frame, where the box is `|x| <= h`: the sphere's centre is moved
 /// into that frame once and the answer out of it once (this pair skips the A-frame round

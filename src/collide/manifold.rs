@@ -442,6 +442,21 @@ fn contact_ordered(
         let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
         return analytic::sphere_cuboid(s, &pose_a, c, &pose_b, margin, out);
     }
+    if let (Shape::Sphere(sa), Shape::Sphere(sb), Route::Fast(cache)) = (a, b, &mut route) {
+        // Closed form in the world frame. Coincident centres take world +Y from the
+        // pair's canonical A to its B (as the general path does), so both orders agree.
+        **cache = PairCache::default();
+        let pose_a = Iso::new(pose_a.position, unit_a);
+        let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
+        let fallback = || {
+            if pair_order(b, &pose_b, a, &pose_a) == Ordering::Less {
+                -Vec3::Y
+            } else {
+                Vec3::Y
+            }
+        };
+        return analytic::sphere_sphere_world(sa, &pose_a, sb, &pose_b, fallback, margin, out);
+    }
     if let (Shape::Sphere(s), Shape::Triangle(t), Route::Fast(cache)) = (a, b, &mut route) {
         // Closed form in the triangle's frame, like the box's.
         **cache = PairCache::default();
