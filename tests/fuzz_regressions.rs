@@ -1569,3 +1569,37 @@ fn capsule_face_contact_is_never_deeper_than_the_closest_pair() {
     assert!((m.min_separation() - expected).abs() < 1.0e-5, "{m:?}");
     assert!(m.normal.x < -0.999, "{m:?}");
 }
+
+/// Root cause: a sphere's centre 0.4 mm outside a hull, by an edge 15.7 m long: GJK's f32
+/// loop stopped with the cores apart on a simplex whose closest point it placed poorly,
+/// the hull's deepest point 19 mm along the edge from the centre's foot and the depth 0.1
+/// mm off the other argument order's. Fix (`collide::gjk::refined_near`): when the cores
+/// stop apart within 1e-3 of the simplex's size on a segment or a triangle, the
+/// penetration finishes the search in f64 (`collide::gjk_f64`) before it reads the
+/// witnesses and the normal.
+#[test]
+fn near_touching_cores_are_finished_in_f64_for_the_penetration() {
+    // sphere-by-a-long-hull-edge-eaadbf85 (narrow_phase, a 10-minute random run at
+    // c1377a8 from the corpus of the one before; fails on the code before it too).
+    let a = Shape::sphere(0.015258789).unwrap();
+    let h = hull(&[
+        Vec3::new(2.446725e-12, 0.0, 7.892334),
+        Vec3::new(1.138432e-39, 0.0, 2.5625),
+        Vec3::new(0.0, 0.00024414063, -7.8125),
+        Vec3::new(2.5725098, 0.029052734, -0.06225586),
+        Vec3::new(5.7109375, 5.51e-41, 0.0),
+    ]);
+    let b = Shape::hull(&h);
+    let pa = Iso::new(
+        Vec3::new(-0.00048828125, 9.1834e-41, 0.25),
+        Quat::from_xyzw(-0.66830236, 0.110050775, -0.5156854, 0.5247186),
+    );
+    assert_cases(&[("eaadbf85", a, pa, b, Iso::IDENTITY, 1.5258789e-5)]);
+    let unit = Iso::new(pa.position, pa.rotation.normalize());
+    let p = penetration(&a, &unit, &b, &Iso::IDENTITY).unwrap().unwrap();
+    let q = penetration(&b, &Iso::IDENTITY, &a, &unit).unwrap().unwrap();
+    // Both orders agree on the depth to 1e-6 m, and the hull's deepest point is the
+    // centre's foot on the edge (z = 0.25), not 19 mm along it.
+    assert!((p.depth - q.depth).abs() < 1.0e-6, "{p:?} {q:?}");
+    assert!((p.point_b.z - 0.25).abs() < 1.0e-4, "{p:?}");
+}

@@ -231,6 +231,14 @@ pub(crate) fn penetration_from_gjk(
     caps: EpaCaps,
 ) -> Option<Penetration> {
     let (ra, rb) = (pa.shape.radius(), pb.shape.radius());
+    // Cores apart by little on a long simplex: the witnesses and the normal are the
+    // answer here, so the search is finished in f64 (`gjk::refined_near`).
+    let refined = if gjk::radius_gap(core.distance, ra, rb) <= 0.0 {
+        gjk::refined_near(pa, pb, core)
+    } else {
+        None
+    };
+    let core = refined.as_ref().unwrap_or(core);
     let gap = gjk::radius_gap(core.distance, ra, rb);
     // Cores apart by less than the rounding of a vertex's or an edge's direction (see
     // `gjk::GJK_DIRECTION_TOLERANCE`) but overlapping through the radii: GJK's normal is

@@ -11,12 +11,17 @@
 //! two 3.3 m boxes 7.6 mm deep, `big-boxes-tilted-normal-5c2ee9ea`) from "apart" (a sphere
 //! 1.2 mm over an 8 m × 3 cm box, `sphere-over-a-thin-box-a11fe352`).
 //!
+//! It is also how [`super::gjk::refined_near`] finishes a search that stopped with the
+//! cores apart by less than 1e-3 of the simplex's size, where the answer's witnesses and
+//! normal matter (a penetration through the radii).
+//!
 //! [`refine`] continues the search from that simplex with the closest point and the
 //! barycentric coordinates computed in f64. The vertices stay the f32 support points of
 //! the cores (`w = b − a` is exact in f64), so the search is exact for the polytopes the
 //! f32 coordinates describe; only the search direction is rounded back to f32 (6e-8 rad),
 //! which can cost a support vertex within an ulp of the best one, never the decision.
-//! The stop is rare (none in the standard scenes), so its cost does not show; the f64
+//! Both cases are rare (no golden line or scene checksum changed when they came), so
+//! their cost does not show; the f64
 //! operations are `+ − × ÷` and `sqrt`, correctly rounded on every target.
 
 use super::gjk::{support, touches_origin, GjkStatus, Simplex, SimplexVertex};
