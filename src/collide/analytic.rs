@@ -200,19 +200,7 @@ pub(crate) fn sphere_sphere_world(
             b: FeatureId::vertex(0),
         },
     };
-    let finite = normal.is_finite()
-        && point.point_a.is_finite()
-        && point.point_b.is_finite()
-        && point.local_a.is_finite()
-        && point.local_b.is_finite()
-        && separation.is_finite();
-    if !finite {
-        return false;
-    }
-    out.normal = normal;
-    out.points[0] = point;
-    out.len = 1;
-    true
+    write_one_point(normal, point, out)
 }
 
 /// Sphere `a` at `pose_a` against box `b` at `pose_b` (world frame, unit rotations), in
@@ -323,11 +311,18 @@ fn one_sphere_point(pose_a: &Iso, r: f32, pose_b: &Iso, on: &SphereOn, out: &mut
             b: on.feature,
         },
     };
+    write_one_point(normal, point, out)
+}
+
+/// Write the one-point manifold `(normal, point)` into `out`; false (and `out` as it
+/// was) when a number of it is not finite.
+fn write_one_point(normal: Vec3, point: ManifoldPoint, out: &mut Manifold) -> bool {
     let finite = normal.is_finite()
         && point.point_a.is_finite()
         && point.point_b.is_finite()
         && point.local_a.is_finite()
-        && on.separation.is_finite();
+        && point.local_b.is_finite()
+        && point.separation.is_finite();
     if !finite {
         return false;
     }

@@ -227,28 +227,45 @@ fn closest_on_triangle(a: V64, b: V64, c: V64) -> ([f64; 3], V64) {
         }
         search = l.map(|x| x <= 0.0 || x.is_nan());
     }
-    let mut best = ([1.0, 0.0, 0.0], a);
-    let mut best_d = f64::INFINITY;
-    let mut consider = |l: [f64; 3], p: V64| {
-        let d = p.length_squared();
-        if d < best_d {
-            best_d = d;
-            best = (l, p);
-        }
-    };
+    let mut nearest = Nearest::new([1.0, 0.0, 0.0], a);
     if search[0] {
         let ([lb, lc], p) = closest_on_segment(b, c);
-        consider([0.0, lb, lc], p);
+        nearest.consider([0.0, lb, lc], p);
     }
     if search[1] {
         let ([la, lc], p) = closest_on_segment(a, c);
-        consider([la, 0.0, lc], p);
+        nearest.consider([la, 0.0, lc], p);
     }
     if search[2] {
         let ([la, lb], p) = closest_on_segment(a, b);
-        consider([la, lb, 0.0], p);
+        nearest.consider([la, lb, 0.0], p);
     }
-    best
+    nearest.best
+}
+
+/// The candidate (coordinates, point) nearest the origin among those considered; the
+/// first of equals.
+struct Nearest<const K: usize> {
+    best: ([f64; K], V64),
+    distance2: f64,
+}
+
+impl<const K: usize> Nearest<K> {
+    /// A search whose answer, if nothing is considered, is `fallback` at `point`.
+    fn new(fallback: [f64; K], point: V64) -> Self {
+        Nearest {
+            best: (fallback, point),
+            distance2: f64::INFINITY,
+        }
+    }
+
+    fn consider(&mut self, l: [f64; K], p: V64) {
+        let d = p.length_squared();
+        if d < self.distance2 {
+            self.distance2 = d;
+            self.best = (l, p);
+        }
+    }
 }
 
 /// `a · (b × c)`.
@@ -266,32 +283,24 @@ fn closest_on_tetrahedron(a: V64, b: V64, c: V64, d: V64) -> ([f64; 4], V64) {
     if inside == [true; 4] {
         return (cof.map(|x| x / det), V64::default());
     }
-    let mut best = ([1.0, 0.0, 0.0, 0.0], a);
-    let mut best_d = f64::INFINITY;
-    let mut consider = |l: [f64; 4], p: V64| {
-        let dd = p.length_squared();
-        if dd < best_d {
-            best_d = dd;
-            best = (l, p);
-        }
-    };
+    let mut nearest = Nearest::new([1.0, 0.0, 0.0, 0.0], a);
     if !inside[0] {
         let ([lb, lc, ld], p) = closest_on_triangle(b, c, d);
-        consider([0.0, lb, lc, ld], p);
+        nearest.consider([0.0, lb, lc, ld], p);
     }
     if !inside[1] {
         let ([la, lc, ld], p) = closest_on_triangle(a, c, d);
-        consider([la, 0.0, lc, ld], p);
+        nearest.consider([la, 0.0, lc, ld], p);
     }
     if !inside[2] {
         let ([la, lb, ld], p) = closest_on_triangle(a, b, d);
-        consider([la, lb, 0.0, ld], p);
+        nearest.consider([la, lb, 0.0, ld], p);
     }
     if !inside[3] {
         let ([la, lb, lc], p) = closest_on_triangle(a, b, c);
-        consider([la, lb, lc, 0.0], p);
+        nearest.consider([la, lb, lc, 0.0], p);
     }
-    best
+    nearest.best
 }
 
 /// GJK from `start` (the simplex an undecided f32 stop ended on) with the sub-algorithm
