@@ -26,102 +26,17 @@
 
 use super::gjk::{support, touches_origin, GjkStatus, Simplex, SimplexVertex};
 use super::Proxy;
-use crate::math::{scalar, Vec3};
-use core::ops::{Add, Mul, Neg, Sub};
+use crate::math::scalar;
+use crate::math::vec64::{self, Vec64};
 
 /// Test 1 of the f64 loop: stop when `|v|² − v·w <= F64_RELATIVE_TOLERANCE · |v| |w|`.
 /// The f64 rounding of `|v|² − v·w` is about 1e-15 of `|v| |w|`; 1e-10 stops well above
 /// it and bounds the distance's error by 1e-10 of the shapes' size.
 const F64_RELATIVE_TOLERANCE: f64 = 1.0e-10;
 
-/// A vector of f64 (the sub-algorithm's arithmetic only).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct V64 {
-    x: f64,
-    y: f64,
-    z: f64,
-}
-
-impl V64 {
-    /// The f32 vector, exactly.
-    fn of(v: Vec3) -> V64 {
-        V64 {
-            x: f64::from(v.x),
-            y: f64::from(v.y),
-            z: f64::from(v.z),
-        }
-    }
-
-    /// Rounded to f32.
-    #[allow(clippy::cast_possible_truncation)]
-    fn rounded(self) -> Vec3 {
-        Vec3::new(self.x as f32, self.y as f32, self.z as f32)
-    }
-
-    fn dot(self, o: V64) -> f64 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    fn cross(self, o: V64) -> V64 {
-        V64 {
-            x: self.y * o.z - self.z * o.y,
-            y: self.z * o.x - self.x * o.z,
-            z: self.x * o.y - self.y * o.x,
-        }
-    }
-
-    fn length_squared(self) -> f64 {
-        self.dot(self)
-    }
-}
-
-impl Add for V64 {
-    type Output = V64;
-    fn add(self, o: V64) -> V64 {
-        V64 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-}
-
-impl Sub for V64 {
-    type Output = V64;
-    fn sub(self, o: V64) -> V64 {
-        V64 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-}
-
-impl Neg for V64 {
-    type Output = V64;
-    fn neg(self) -> V64 {
-        V64 {
-            x: -self.x,
-            y: -self.y,
-            z: -self.z,
-        }
-    }
-}
-
-impl Mul<f64> for V64 {
-    type Output = V64;
-    fn mul(self, s: f64) -> V64 {
-        V64 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-}
-
 /// `w = b − a` of a simplex vertex, exact in f64.
-fn w64(v: &SimplexVertex) -> V64 {
-    V64::of(v.b) - V64::of(v.a)
+fn w64(v: &SimplexVertex) -> Vec64 {
+    Vec64::of(v.b) - Vec64::of(v.a)
 }
 
 /// A simplex with its closest point in f64.
@@ -134,7 +49,7 @@ struct Simplex64 {
     /// Vertices in use, 1 to 4.
     count: usize,
     /// The point of the simplex closest to the origin.
-    point: V64,
+    point: Vec64,
 }
 
 impl Simplex64 {
@@ -195,7 +110,7 @@ impl Simplex64 {
 }
 
 /// Closest point of the segment `a b` to the origin: coordinates and point.
-fn closest_on_segment(a: V64, b: V64) -> ([f64; 2], V64) {
+fn closest_on_segment(a: Vec64, b: Vec64) -> ([f64; 2], Vec64) {
     let t = b - a;
     let tt = t.length_squared();
     if !(tt > 0.0 && tt.is_finite()) {
@@ -215,7 +130,7 @@ fn closest_on_segment(a: V64, b: V64) -> ([f64; 2], V64) {
 /// origin's projection on the plane has coordinates `n·(b × c)`, `n·(c × a)`, `n·(a × b)`
 /// over `n·n` (`n = (b − a) × (c − a)`); if one is not positive the closest point lies
 /// on an edge opposite such a vertex.
-fn closest_on_triangle(a: V64, b: V64, c: V64) -> ([f64; 3], V64) {
+fn closest_on_triangle(a: Vec64, b: Vec64, c: Vec64) -> ([f64; 3], Vec64) {
     let n = (b - a).cross(c - a);
     let nn = n.length_squared();
     let mut search = [true; 3];
@@ -246,20 +161,20 @@ fn closest_on_triangle(a: V64, b: V64, c: V64) -> ([f64; 3], V64) {
 /// The candidate (coordinates, point) nearest the origin among those considered; the
 /// first of equals.
 struct Nearest<const K: usize> {
-    best: ([f64; K], V64),
+    best: ([f64; K], Vec64),
     distance2: f64,
 }
 
 impl<const K: usize> Nearest<K> {
     /// A search whose answer, if nothing is considered, is `fallback` at `point`.
-    fn new(fallback: [f64; K], point: V64) -> Self {
+    fn new(fallback: [f64; K], point: Vec64) -> Self {
         Nearest {
             best: (fallback, point),
             distance2: f64::INFINITY,
         }
     }
 
-    fn consider(&mut self, l: [f64; K], p: V64) {
+    fn consider(&mut self, l: [f64; K], p: Vec64) {
         let d = p.length_squared();
         if d < self.distance2 {
             self.distance2 = d;
@@ -269,19 +184,19 @@ impl<const K: usize> Nearest<K> {
 }
 
 /// `a · (b × c)`.
-fn det3(a: V64, b: V64, c: V64) -> f64 {
+fn det3(a: Vec64, b: Vec64, c: Vec64) -> f64 {
     a.dot(b.cross(c))
 }
 
 /// Closest point of the tetrahedron `a b c d` to the origin: coordinates (the cofactors
 /// of Cramer's rule over `det M`, as in the f32 `s3d`) and point; the faces opposite the
 /// vertices of the wrong sign are searched when the origin is outside.
-fn closest_on_tetrahedron(a: V64, b: V64, c: V64, d: V64) -> ([f64; 4], V64) {
+fn closest_on_tetrahedron(a: Vec64, b: Vec64, c: Vec64, d: Vec64) -> ([f64; 4], Vec64) {
     let cof = [-det3(b, c, d), det3(a, c, d), -det3(a, b, d), det3(a, b, c)];
     let det = cof[0] + cof[1] + cof[2] + cof[3];
     let inside = cof.map(|x| (det > 0.0 && x > 0.0) || (det < 0.0 && x < 0.0));
     if inside == [true; 4] {
-        return (cof.map(|x| x / det), V64::default());
+        return (cof.map(|x| x / det), Vec64::default());
     }
     let mut nearest = Nearest::new([1.0, 0.0, 0.0, 0.0], a);
     if !inside[0] {
@@ -333,7 +248,7 @@ pub(crate) fn refine(
         let ww = w64(&w);
         // 1: the lower bound v·w/|v| meets the upper bound |v| (within f64 rounding).
         let gap = vv - s.point.dot(ww);
-        let bound = F64_RELATIVE_TOLERANCE * libm::sqrt(vv * ww.length_squared());
+        let bound = F64_RELATIVE_TOLERANCE * vec64::sqrt(vv * ww.length_squared());
         if gap <= bound || s.used().iter().any(|u| u.same_as(&w)) {
             status = GjkStatus::Separated;
             break;
@@ -364,8 +279,8 @@ pub(crate) fn refine(
 mod tests {
     use super::*;
 
-    fn v(x: f64, y: f64, z: f64) -> V64 {
-        V64 { x, y, z }
+    fn v(x: f64, y: f64, z: f64) -> Vec64 {
+        Vec64 { x, y, z }
     }
 
     #[test]
@@ -402,7 +317,7 @@ mod tests {
             v(-1.0, -1.0, 3.0),
         );
         let (l, p) = closest_on_tetrahedron(a, b, c, d);
-        assert_eq!(p, V64::default());
+        assert_eq!(p, Vec64::default());
         assert_eq!(l, [0.25; 4]);
         let s = v(0.0, 0.0, 2.0);
         let (l, p) = closest_on_tetrahedron(a + s, b + s, c + s, d + s);

@@ -14,6 +14,7 @@ mod mat3;
 mod quat;
 pub mod scalar;
 mod vec3;
+pub(crate) mod vec64;
 
 pub use aabb::Aabb;
 pub use iso::Iso;

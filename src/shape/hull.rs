@@ -14,6 +14,7 @@
 
 use super::{Face, FeatureId, MassProperties, Ray, RayHit, MAX_FACE_VERTICES};
 use crate::error::{Error, HullError, Input};
+use crate::math::vec64::Vec64;
 use crate::math::{scalar, Aabb, Iso, Mat3, Vec3};
 
 /// Most vertices a hull keeps.
@@ -558,20 +559,20 @@ impl ConvexHull {
         if vs.is_empty() {
             return None;
         }
-        let mut r = D3::ZERO;
+        let mut r = Vec64::ZERO;
         for v in vs {
-            r = r.add(D3::from(*v));
+            r = r + Vec64::of(*v);
         }
-        r = r.scale(1.0 / vs.len() as f64);
+        r = r * (1.0 / vs.len() as f64);
         let mut six_volume = 0.0f64; // Σ det
-        let mut moment = D3::ZERO; // Σ det · s
+        let mut moment = Vec64::ZERO; // Σ det · s
         let mut second = Sym64::default(); // Σ det · (a aᵀ + b bᵀ + c cᵀ + s sᵀ)
         for f in 0..self.face_count() {
             let idx = self.face_vertices(f);
             let Some((&first, rest)) = idx.split_first() else {
                 continue;
             };
-            let at = |i: u8| D3::from(self.core_vertex(i as u32)).sub(r);
+            let at = |i: u8| Vec64::of(self.core_vertex(i as u32)) - r;
             let a = at(first);
             for pair in rest.windows(2) {
                 let (Some(&i), Some(&j)) = (pair.first(), pair.get(1)) else {
@@ -579,9 +580,9 @@ impl ConvexHull {
                 };
                 let (b, c) = (at(i), at(j));
                 let det = a.dot(b.cross(c));
-                let s = a.add(b).add(c);
+                let s = a + b + c;
                 six_volume += det;
-                moment = moment.add(s.scale(det));
+                moment = moment + s * det;
                 second.add_outer(a, det);
                 second.add_outer(b, det);
                 second.add_outer(c, det);
@@ -593,11 +594,11 @@ impl ConvexHull {
             return None;
         }
         // ∫ x dV = Σ det s / 24, divided by V = Σ det / 6.
-        let c = moment.scale(1.0 / (4.0 * six_volume));
+        let c = moment * (1.0 / (4.0 * six_volume));
         // ∫ x xᵀ dV = Σ det (...) / 120, then C = ∫ x xᵀ dV − V c cᵀ.
         let mut cov = second.scaled(1.0 / 120.0);
         cov.add_outer(c, -volume);
-        Some((volume as f32, r.add(c).to_f32(), cov.to_mat3()))
+        Some((volume as f32, (r + c).rounded(), cov.to_mat3()))
     }
 
     /// Ray cast in the local frame by clipping the ray against every face plane
@@ -645,80 +646,12 @@ impl ConvexHull {
 // target (soft-float on an MCU: slower, but a hull is built once).
 // ---------------------------------------------------------------------------------------
 
-/// A point or direction in f64 for the builder's predicates.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-struct D3 {
-    x: f64,
-    y: f64,
-    z: f64,
-}
-
-impl D3 {
-    const ZERO: D3 = D3 {
-        x: 0.0,
-        y: 0.0,
-        z: 0.0,
-    };
-
-    fn from(v: Vec3) -> D3 {
-        D3 {
-            x: v.x as f64,
-            y: v.y as f64,
-            z: v.z as f64,
-        }
-    }
-
-    fn sub(self, o: D3) -> D3 {
-        D3 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-
-    fn add(self, o: D3) -> D3 {
-        D3 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-
-    fn scale(self, s: f64) -> D3 {
-        D3 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-
-    fn dot(self, o: D3) -> f64 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-
-    fn cross(self, o: D3) -> D3 {
-        D3 {
-            x: self.y * o.z - self.z * o.y,
-            y: self.z * o.x - self.x * o.z,
-            z: self.x * o.y - self.y * o.x,
-        }
-    }
-
-    fn length_squared(self) -> f64 {
-        self.dot(self)
-    }
-
-    /// `self / |self|`, or `None` when zero, not finite, or outside the range where the
-    /// f32 seed of [`sqrt64`] is valid (never for accepted inputs: `|v|²` lies between
-    /// `MIN_TOLERANCE⁴ = 10⁻³²` and `(2 · MAX_COORDINATE)⁴ ≈ 10²⁵`).
-    fn unit(self) -> Option<D3> {
-        let l = sqrt64(self.length_squared())?;
-        Some(self.scale(1.0 / l))
-    }
-
-    fn to_f32(self) -> Vec3 {
-        Vec3::new(self.x as f32, self.y as f32, self.z as f32)
-    }
+/// `v / |v|`, or `None` when zero, not finite, or outside the range where the f32 seed
+/// of [`sqrt64`] is valid (never for accepted inputs: `|v|²` lies between
+/// `MIN_TOLERANCE⁴ = 10⁻³²` and `(2 · MAX_COORDINATE)⁴ ≈ 10²⁵`).
+fn unit(v: Vec64) -> Option<Vec64> {
+    let l = sqrt64(v.length_squared())?;
+    Some(v * (1.0 / l))
 }
 
 /// A symmetric 3×3 matrix in f64 (xx, yy, zz, xy, yz, zx), for second moments.
@@ -734,7 +667,7 @@ struct Sym64 {
 
 impl Sym64 {
     /// `self += w · v vᵀ`.
-    fn add_outer(&mut self, v: D3, w: f64) {
+    fn add_outer(&mut self, v: Vec64, w: f64) {
         self.xx += w * v.x * v.x;
         self.yy += w * v.y * v.y;
         self.zz += w * v.z * v.z;
@@ -782,8 +715,8 @@ fn sqrt64(x: f64) -> Option<f64> {
 }
 
 /// Input point `i` in f64, or the origin for an index out of range.
-fn point_at(points: &[Vec3], i: usize) -> D3 {
-    points.get(i).copied().map_or(D3::ZERO, D3::from)
+fn point_at(points: &[Vec3], i: usize) -> Vec64 {
+    points.get(i).copied().map_or(Vec64::ZERO, Vec64::of)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -840,7 +773,7 @@ fn initial_simplex(points: &[Vec3], eps: f64) -> Result<[u16; 4], Error> {
     let (mut a, mut b, mut best) = (0usize, 0usize, -1.0f64);
     for (k, &i) in extremes.iter().enumerate() {
         for &j in extremes.iter().skip(k + 1) {
-            let d2 = at(j).sub(at(i)).length_squared();
+            let d2 = (at(j) - at(i)).length_squared();
             if d2 > best {
                 (a, b, best) = (i, j, d2);
             }
@@ -851,13 +784,10 @@ fn initial_simplex(points: &[Vec3], eps: f64) -> Result<[u16; 4], Error> {
         return Err(Error::Hull(HullError::Coincident));
     }
     let (pa, pb) = (at(a), at(b));
-    let axis = pb
-        .sub(pa)
-        .unit()
-        .ok_or(Error::Hull(HullError::Coincident))?;
+    let axis = unit(pb - pa).ok_or(Error::Hull(HullError::Coincident))?;
     let (mut c, mut best) = (0usize, -1.0f64);
     for i in 0..points.len() {
-        let d2 = at(i).sub(pa).cross(axis).length_squared();
+        let d2 = (at(i) - pa).cross(axis).length_squared();
         if d2 > best {
             (c, best) = (i, d2);
         }
@@ -866,14 +796,10 @@ fn initial_simplex(points: &[Vec3], eps: f64) -> Result<[u16; 4], Error> {
         return Err(Error::Hull(HullError::Collinear));
     }
     let pc = at(c);
-    let normal = pb
-        .sub(pa)
-        .cross(pc.sub(pa))
-        .unit()
-        .ok_or(Error::Hull(HullError::Collinear))?;
+    let normal = unit((pb - pa).cross(pc - pa)).ok_or(Error::Hull(HullError::Collinear))?;
     let (mut d, mut best, mut side) = (0usize, -1.0f64, 0.0f64);
     for i in 0..points.len() {
-        let h = normal.dot(at(i).sub(pa));
+        let h = normal.dot(at(i) - pa);
         let dist = if h < 0.0 { -h } else { h };
         if dist > best {
             (d, best, side) = (i, dist, h);
@@ -927,7 +853,7 @@ const PENDING: u8 = u8::MAX - 1;
 struct Tri {
     v: [u16; 3],
     adj: [u8; 3],
-    n: D3,
+    n: Vec64,
     d: f64,
     alive: bool,
     visible: bool,
@@ -936,7 +862,7 @@ struct Tri {
 const DEAD_TRI: Tri = Tri {
     v: [0; 3],
     adj: [NONE; 3],
-    n: D3::ZERO,
+    n: Vec64::ZERO,
     d: 0.0,
     alive: false,
     visible: false,
@@ -945,7 +871,7 @@ const DEAD_TRI: Tri = Tri {
 impl Tri {
     /// Signed height of `p` above the plane (m).
     #[inline]
-    fn height(&self, p: D3) -> f64 {
+    fn height(&self, p: Vec64) -> f64 {
         self.n.dot(p) - self.d
     }
 
@@ -1062,7 +988,7 @@ impl<'p> Builder<'p> {
         Ok(())
     }
 
-    fn point(&self, i: u16) -> D3 {
+    fn point(&self, i: u16) -> Vec64 {
         point_at(self.points, i as usize)
     }
 
@@ -1093,11 +1019,7 @@ impl<'p> Builder<'p> {
     /// Fails on a zero-area triangle, which a consistent mesh never makes.
     fn add_tri(&mut self, slot: usize, v: [u16; 3]) -> Result<(), Error> {
         let [pa, pb, pc] = v.map(|i| self.point(i));
-        let n = pb
-            .sub(pa)
-            .cross(pc.sub(pa))
-            .unit()
-            .ok_or(Error::Hull(HullError::TooComplex))?;
+        let n = unit((pb - pa).cross(pc - pa)).ok_or(Error::Hull(HullError::TooComplex))?;
         // Offset averaged over the corners, summed in corner order.
         let d = (n.dot(pa) + n.dot(pb) + n.dot(pc)) * (1.0 / 3.0);
         let tri = self
@@ -1291,7 +1213,7 @@ impl<'p> Builder<'p> {
 
     /// Mark the triangles `p` sees: the connected region, grown through shared edges
     /// from `seed`, of triangles `p` is more than `eps` above (Barber et al.).
-    fn mark_visible(&mut self, p: D3, seed: u8) {
+    fn mark_visible(&mut self, p: Vec64, seed: u8) {
         for t in self.tris.iter_mut() {
             t.visible = false;
         }
@@ -1333,7 +1255,7 @@ impl<'p> Builder<'p> {
     /// the plane of a flat region the cone triangle can even come out upside down. Each
     /// round makes the triangle beyond every offending horizon edge visible; each round
     /// that does not finish makes at least one more triangle visible.
-    fn settle_horizon(&mut self, p: D3, horizon: &mut [Edge; MAX_HORIZON]) -> Option<usize> {
+    fn settle_horizon(&mut self, p: Vec64, horizon: &mut [Edge; MAX_HORIZON]) -> Option<usize> {
         let mut vertices = [0u16; MAX_HULL_VERTICES];
         let mut nv = 0usize;
         let n = self.points.len().min(MAX_HULL_INPUT_POINTS);
@@ -1366,16 +1288,16 @@ impl<'p> Builder<'p> {
     /// whose triangle `p` is farther below cannot be mended that way; when it leaves a
     /// vertex more than `eps` outside, the cone is refused ([`Folds::Stuck`]), else
     /// accepted ([`Folds::Mild`]).
-    fn absorb_folds(&mut self, p: D3, horizon: &[Edge], vertices: &[u16]) -> Folds {
+    fn absorb_folds(&mut self, p: Vec64, horizon: &[Edge], vertices: &[u16]) -> Folds {
         let limit = FOLD_FRACTION * self.eps;
         let mut absorbed = false;
         let mut stuck = false;
         for e in horizon {
             let a = self.point(e.a);
-            let worst = match self.point(e.b).sub(a).cross(p.sub(a)).unit() {
+            let worst = match unit((self.point(e.b) - a).cross(p - a)) {
                 Some(n) => vertices
                     .iter()
-                    .map(|&v| n.dot(self.point(v).sub(a)))
+                    .map(|&v| n.dot(self.point(v) - a))
                     .fold(f64::NEG_INFINITY, |m, h| if h > m { h } else { m }),
                 None => f64::INFINITY,
             };
@@ -1403,7 +1325,7 @@ impl<'p> Builder<'p> {
     /// When the horizon is not one simple loop (never seen in testing, but not ruled out
     /// by rounding), add to the visible set every triangle next to it that `p` is less
     /// than `eps` below. Returns false when there was none.
-    fn grow_visible(&mut self, p: D3) -> bool {
+    fn grow_visible(&mut self, p: Vec64) -> bool {
         let mut grow = [false; MAX_WORK_TRIS];
         for (g, t) in grow.iter_mut().zip(self.tris.iter()) {
             let touches = t
@@ -1567,7 +1489,7 @@ impl<'p> Builder<'p> {
         for (slot, t) in self.tris.iter().enumerate().filter(|(_, t)| t.alive) {
             let [a, b, c] = t.v.map(|i| self.point(i));
             if let (Some(area), Some(o)) = (area2.get_mut(slot), order.get_mut(live)) {
-                *area = b.sub(a).cross(c.sub(a)).length_squared();
+                *area = (b - a).cross(c - a).length_squared();
                 *o = slot as u8;
                 live += 1;
             }
@@ -1700,7 +1622,7 @@ impl<'p> Builder<'p> {
     }
 
     /// The plane with normal `n` through the highest of `corners`.
-    fn plane_over(&self, n: D3, corners: &[u16]) -> (D3, f64) {
+    fn plane_over(&self, n: Vec64, corners: &[u16]) -> (Vec64, f64) {
         let mut d = f64::NEG_INFINITY;
         for &i in corners {
             let h = n.dot(self.point(i));
@@ -1713,14 +1635,14 @@ impl<'p> Builder<'p> {
 
     /// Is the polygon convex and counter-clockwise about `n`, within `eps`: every corner
     /// at most `eps` to the right of every edge, `((b − a) × (c − a)) · n ≥ −eps |b − a|`?
-    fn is_convex(&self, corners: &[u16], n: D3) -> bool {
+    fn is_convex(&self, corners: &[u16], n: Vec64) -> bool {
         let next = corners.iter().skip(1).chain(corners.first());
         for (&i, &j) in corners.iter().zip(next) {
             let (a, b) = (self.point(i), self.point(j));
-            let ab = b.sub(a);
+            let ab = b - a;
             let slack = self.eps * sqrt64(ab.length_squared()).unwrap_or(0.0);
             for &k in corners {
-                if ab.cross(self.point(k).sub(a)).dot(n) < -slack {
+                if ab.cross(self.point(k) - a).dot(n) < -slack {
                     return false;
                 }
             }
@@ -1806,7 +1728,7 @@ struct Polygons {
     len: [u8; MAX_WORK_TRIS],
     corners: [u16; 3 * MAX_WORK_TRIS],
     /// Each polygon's plane `n · p = d`.
-    planes: [(D3, f64); MAX_WORK_TRIS],
+    planes: [(Vec64, f64); MAX_WORK_TRIS],
     count: usize,
     used: usize,
 }
@@ -1817,13 +1739,13 @@ impl Polygons {
             start: [0; MAX_WORK_TRIS],
             len: [0; MAX_WORK_TRIS],
             corners: [0; 3 * MAX_WORK_TRIS],
-            planes: [(D3::ZERO, 0.0); MAX_WORK_TRIS],
+            planes: [(Vec64::ZERO, 0.0); MAX_WORK_TRIS],
             count: 0,
             used: 0,
         }
     }
 
-    fn push(&mut self, corners: &[u16], plane: (D3, f64)) -> Result<(), Error> {
+    fn push(&mut self, corners: &[u16], plane: (Vec64, f64)) -> Result<(), Error> {
         let full = Error::Hull(HullError::TooComplex);
         *self.planes.get_mut(self.count).ok_or(full)? = plane;
         let dst = self
@@ -1838,8 +1760,8 @@ impl Polygons {
         Ok(())
     }
 
-    fn plane(&self, k: usize) -> (D3, f64) {
-        self.planes.get(k).copied().unwrap_or((D3::ZERO, 0.0))
+    fn plane(&self, k: usize) -> (Vec64, f64) {
+        self.planes.get(k).copied().unwrap_or((Vec64::ZERO, 0.0))
     }
 
     fn corners(&self, k: usize) -> &[u16] {
@@ -1911,7 +1833,7 @@ fn link_edges(hull: &mut ConvexHull) {
 /// its plane as faces: whole when it has at most [`MAX_FACE_VERTICES`] corners, else as a
 /// fan of pieces from corner 0: `0, 1..=15`, `0, 15..=29`, ... (each piece a convex
 /// sub-polygon in the same plane).
-fn emit_split(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<(), Error> {
+fn emit_split(hull: &mut ConvexHull, corners: &[u8], plane: (Vec64, f64)) -> Result<(), Error> {
     let len = corners.len();
     if len <= MAX_FACE_VERTICES {
         return emit_face(hull, corners, plane);
@@ -1934,7 +1856,7 @@ fn emit_split(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result
 /// Append one face with its plane `(n, d)` rounded to f32; the offset is raised, if
 /// rounding needs it, to the largest `n · c` over the corners in f32, so every corner lies
 /// on or below the stored plane.
-fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<(), Error> {
+fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (Vec64, f64)) -> Result<(), Error> {
     let full = Error::Hull(HullError::TooComplex);
     let f = hull.face_count as usize;
     let start = hull
@@ -1948,7 +1870,7 @@ fn emit_face(hull: &mut ConvexHull, corners: &[u8], plane: (D3, f64)) -> Result<
         .ok_or(full)?;
     dst.copy_from_slice(corners);
     let (n64, d64) = plane;
-    let n = n64.unit().ok_or(full)?.to_f32();
+    let n = unit(n64).ok_or(full)?.rounded();
     let mut d = d64 as f32;
     for &c in corners {
         d = scalar::max(d, n.dot(hull.core_vertex(c as u32)));
