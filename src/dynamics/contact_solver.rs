@@ -392,26 +392,26 @@ pub(crate) fn prepare<const N: usize>(
     let (vb, wb) = sb.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
     let m = c.material;
     let (rho_a, rho_b) = (body_a.shape.radius(), body_b.shape.radius());
-    *k = ContactConstraint {
-        contact: index,
-        slot_a: c.a,
-        slot_b: c.b,
-        a: if sa.is_some() { ia } else { NONE },
-        b: if sb.is_some() { ib } else { NONE },
-        inv_mass_a: m_a,
-        inv_mass_b: m_b,
-        normal: n,
-        tangents: [t1, t2],
-        friction: [m.static_friction, m.kinetic_friction],
-        restitution: m.restitution,
-        softness: if rigid_partner {
-            softness[1]
-        } else {
-            softness[0]
-        },
-        radius_sum: rho_a + rho_b,
-        ..ContactConstraint::default()
+    // Every field is written below (the patch and angular rows in their functions); the
+    // points past `len` keep what they held, and nothing reads them.
+    k.contact = index;
+    k.slot_a = c.a;
+    k.slot_b = c.b;
+    k.a = if sa.is_some() { ia } else { NONE };
+    k.b = if sb.is_some() { ib } else { NONE };
+    k.inv_mass_a = m_a;
+    k.inv_mass_b = m_b;
+    k.normal = n;
+    k.tangents = [t1, t2];
+    k.len = 0;
+    k.friction = [m.static_friction, m.kinetic_friction];
+    k.restitution = m.restitution;
+    k.softness = if rigid_partner {
+        softness[1]
+    } else {
+        softness[0]
     };
+    k.radius_sum = rho_a + rho_b;
     // Warm-start impulses are bounded: none may change a normal speed by more than twice
     // the speed limit plus the push-out (a real one never comes near). So no stored
     // impulse, however it came to be (a crafted snapshot included), can send a body to a
@@ -559,7 +559,8 @@ fn prepare_patch(
     k.sticking =
         c.sticking || slip.length_squared() < cfg.stick_speed * cfg.stick_speed || total <= 0.0;
     let twist_limit = k.friction[0] * twist_lever_sum(k);
-    k.angular_impulse[2] = scalar::clamp(c.twist_impulse, -twist_limit, twist_limit);
+    let twist = scalar::clamp(c.twist_impulse, -twist_limit, twist_limit);
+    k.angular_impulse = [0.0, 0.0, twist];
 }
 
 /// `Σ λ_n,i d_i`: the twist the patch's normal impulses can hold per unit of friction.
@@ -586,6 +587,11 @@ fn prepare_angular_rows(
 ) {
     let rolls = k.len <= 2 && rolling > 0.0;
     let twists = k.len == 1 && twist > 0.0;
+    k.rolling = 0.0;
+    k.twist = 0.0;
+    k.ia_axes = [Vec3::ZERO; 3];
+    k.ib_axes = [Vec3::ZERO; 3];
+    k.axis_mass = [0.0; 3];
     if rolls || twists {
         let lever = match (k.inv_mass_a > 0.0, k.inv_mass_b > 0.0) {
             (true, true) => scalar::min(r_a.length(), r_b.length()),
