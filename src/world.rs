@@ -18,7 +18,7 @@ use crate::shape::Shape;
 /// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
 /// many candidate pairs per step) and `EVENTS` events per step.
 ///
-/// Everything lives inline: no heap. A world is large (588 bytes per body slot and 1072
+/// Everything lives inline: no heap. A world is large (612 bytes per body slot and 1072
 /// per contact slot on 64-bit hosts, README "Capacity"), so where it lives matters:
 ///
 /// - In a `static`: `World::new` is a `const fn`, so the compiler builds the world and
@@ -177,7 +177,13 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         mid_phase::update_parts(&mut self.contacts, &self.bodies, &mut report);
         // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
         let events = &mut self.events;
-        contact::update_contacts(&mut self.contacts, &self.bodies, &cfg, events, &mut report);
+        contact::update_contacts(
+            &mut self.contacts,
+            &mut self.bodies,
+            &cfg,
+            events,
+            &mut report,
+        );
         self.trace(&mut trace, Stage::NarrowPhase);
         // 7 solve in sub-steps: integrate, warm start, soft contacts, relax, restitution
         let (contacts, scratch) = (&mut self.contacts, &mut self.pairs);

@@ -377,6 +377,10 @@ pub(crate) struct Body<'a> {
     /// Set when `fat` was replaced (or the body was added or teleported): the broad phase
     /// looks for the body's new pairs and clears it.
     pub moved: bool,
+    /// A box (world, m) around the shape at `pose`, formed at the start of each narrow
+    /// phase ([`Body::refresh_bounds`]) for its test of empty pairs. Derived, not state: a
+    /// snapshot neither holds nor needs it.
+    pub bounds: Aabb,
 }
 
 /// A shape built from its public fields must satisfy what its constructor checks: the
@@ -502,9 +506,25 @@ impl<'a> Body<'a> {
             pose0: pose,
             fat: d.shape.aabb(&pose),
             moved: true,
+            bounds: d.shape.aabb(&pose),
         };
         b.update_inertia();
         Ok(b)
+    }
+
+    /// Form [`Body::bounds`] at the current pose: the shape's exact box when it costs a
+    /// few products (sphere, capsule, cuboid, triangle), else the box of its bounding
+    /// sphere about the body's origin (a hull's exact box is a pass over its vertices).
+    pub fn refresh_bounds(&mut self) {
+        self.bounds = match self.shape {
+            Shape::Sphere(_) | Shape::Capsule(_) | Shape::Cuboid(_) | Shape::Triangle(_) => {
+                self.shape.aabb(&self.pose)
+            }
+            _ => Aabb::from_center_half(
+                self.pose.position,
+                Vec3::splat(self.shape.bounding_radius()),
+            ),
+        };
     }
 
     /// True for a dynamic body.
