@@ -231,9 +231,11 @@ pub(crate) fn penetration_from_gjk(
     caps: EpaCaps,
 ) -> Option<Penetration> {
     let (ra, rb) = (pa.shape.radius(), pb.shape.radius());
+    // Whether the shapes overlap is decided by the f32 search, as `distance` decides it.
+    let f32_gap = gjk::radius_gap(core.distance, ra, rb);
     // Cores apart by little on a long simplex: the witnesses and the normal are the
     // answer here, so the search is finished in f64 (`gjk::refined_near`).
-    let refined = if gjk::radius_gap(core.distance, ra, rb) <= 0.0 {
+    let refined = if f32_gap <= 0.0 {
         gjk::refined_near(pa, pb, core)
     } else {
         None
@@ -250,13 +252,14 @@ pub(crate) fn penetration_from_gjk(
         inflated(c, ra, rb)
     } else {
         // Cores apart: GJK's answer is exact (an upper bound on the core distance,
-        // so a lower bound on the depth, when GJK hit its cap).
-        if gap > 0.0 {
+        // so a lower bound on the depth, when GJK hit its cap). Shapes that touch in
+        // f32 but part by a rounding in f64 touch, at depth 0.
+        if f32_gap > 0.0 {
             return None;
         }
         let n = core.normal;
         Penetration {
-            depth: -gap,
+            depth: scalar::max(-gap, 0.0),
             normal: n,
             point_a: core.point_a + n * ra,
             point_b: core.point_b - n * rb,
