@@ -1633,3 +1633,41 @@ fn touching_in_f32_is_touching_after_the_f64_finish() {
         assert!(p.normal.y.abs() > 0.999_999, "{p:?}");
     }
 }
+
+/// Root cause: a 3.89 m sphere centred on a hull edge where the hull is a sliver (vertices
+/// 0.1 to 0.5 mm off the edge): the cores touch, EPA's polytope stalled on a face whose
+/// plane was off by rounding, and the stall was certified by the bracket of EPA's and the
+/// separating axes' upper bounds. The depth was right to the tolerance, but the answer
+/// took the stalled face's normal, along which `D` reaches 2.7 m: moving B by the depth
+/// along it left the shapes 0.23 m overlapped. Fix (`collide::epa`): a certified stall
+/// answers along the direction of the smallest upper bound (status `Degenerate`: its
+/// points are the supports along it, not a closest pair).
+#[test]
+fn a_certified_stall_answers_along_its_upper_bound() {
+    // sphere-on-a-sliver-hull-edge-d1bb2040 (narrow_phase, a 7-minute random run at
+    // 87aa4bb; fails on b27cf03 too).
+    let a = Shape::sphere(3.8900146).unwrap();
+    let h = hull(&[
+        Vec3::new(2.446725e-12, 0.0, -1.795166),
+        Vec3::new(1.138432e-39, 0.0, 2.5725098),
+        Vec3::new(0.0, 0.00024414063, -7.8125),
+        Vec3::new(2.5927734, 7.4677734, 2.6345215),
+        Vec3::new(0.0, 0.00024414063, 6.21167),
+        Vec3::new(6.21167, 6.21167, 6.21167),
+        Vec3::new(0.00048828125, 0.0, -6.4172363),
+    ]);
+    let b = Shape::hull(&h);
+    let pa = Iso::new(
+        Vec3::new(0.0, 9.1e-44, 0.25),
+        Quat::from_xyzw(0.7106986, 0.62766033, 0.2548318, -0.18976486),
+    );
+    assert_cases(&[("d1bb2040", a, pa, b, Iso::IDENTITY, 1.5258789e-5)]);
+    let unit = Iso::new(pa.position, pa.rotation.normalize());
+    let p = penetration(&a, &unit, &b, &Iso::IDENTITY).unwrap().unwrap();
+    // The radius deep (the cores touch), and B moved by it (plus 0.1 mm) along the
+    // normal is clear of the sphere.
+    assert!((p.depth - 3.8900146).abs() < 1.0e-4, "{p:?}");
+    let moved = Iso::new(p.normal * (p.depth + 1.0e-4), Quat::IDENTITY);
+    let d = distance(&a, &unit, &b, &moved, &mut SimplexCache::default()).unwrap();
+    assert!(d.distance > 0.0, "{p:?} {d:?}");
+}

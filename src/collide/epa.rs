@@ -88,7 +88,9 @@ pub enum EpaStatus {
     /// The iteration cap was hit; the answer is the best found so far.
     IterationLimit,
     /// The Minkowski difference was too thin to expand, or too flat at the converged face
-    /// for its witness points; a fallback (depth and normal bound the overlap) was given.
+    /// for its witness points, or the closest face was a sliver whose depth an upper bound
+    /// certified; a fallback (depth and normal bound the overlap, the points are the
+    /// supports along the normal) was given.
     Degenerate,
 }
 
@@ -810,8 +812,8 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
     let mut best: Option<(Vec3, f32)> = None;
     let mut status = EpaStatus::IterationLimit;
     let mut iterations = 0;
-    // SAT's upper bound, computed at the first stall.
-    let mut sat_upper: Option<f32> = None;
+    // SAT's direction and upper bound, computed at the first stall.
+    let mut sat_upper: Option<(Vec3, f32)> = None;
     while iterations < caps.iterations {
         iterations += 1;
         let Some(fi) = poly.closest_face() else {
@@ -832,9 +834,14 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
             // tolerance, so the face's plane is off by rounding (a sliver face). It is
             // the answer only if the bracket certifies it; otherwise it is set aside
             // and the next closest face is tried.
-            let sat = *sat_upper.get_or_insert_with(|| sat_axis(pa, pb).1);
-            if stall_is_certified(best, sat, face.distance, tol) {
-                return converged(&poly, &face, tol, iterations);
+            let sat = *sat_upper.get_or_insert_with(|| sat_axis(pa, pb));
+            if stall_is_certified(best, sat.1, face.distance, tol) {
+                // The depth is certified, not the face's normal (the support along it lies
+                // beyond the face by more than `tol`): the answer is taken along the
+                // direction of the smallest upper bound, which moves the cores apart, with
+                // the supports along it as points (so not `Converged`: they are not the
+                // closest pair).
+                return along_upper_bound(pa, pb, best, sat, EpaStatus::Degenerate, iterations);
             }
             if let Some(f) = poly.faces.get_mut(fi) {
                 f.stalled = true;
@@ -936,7 +943,20 @@ fn bounded_answer(
     status: EpaStatus,
     iterations: u32,
 ) -> CorePenetration {
-    let (sat_m, sat_upper) = sat_axis(pa, pb);
+    along_upper_bound(pa, pb, best, sat_axis(pa, pb), status, iterations)
+}
+
+/// The answer along the smaller of EPA's best upper bound `best` and SAT's `sat`
+/// (direction `m`, `h_D(m)`): depth `max(h_D(m), 0)`, normal `−m`, the support points
+/// along `m` as witnesses.
+fn along_upper_bound(
+    pa: &Proxy,
+    pb: &Proxy,
+    best: Option<(Vec3, f32)>,
+    (sat_m, sat_upper): (Vec3, f32),
+    status: EpaStatus,
+    iterations: u32,
+) -> CorePenetration {
     let (m, upper) = match best {
         Some((m, u)) if u <= sat_upper => (m, u),
         _ => (sat_m, sat_upper),
