@@ -1640,8 +1640,9 @@ fn touching_in_f32_is_touching_after_the_f64_finish() {
 /// separating axes' upper bounds. The depth was right to the tolerance, but the answer
 /// took the stalled face's normal, along which `D` reaches 2.7 m: moving B by the depth
 /// along it left the shapes 0.23 m overlapped. Fix (`collide::epa`): a certified stall
-/// answers along the direction of the smallest upper bound (status `Degenerate`: its
-/// points are the supports along it, not a closest pair).
+/// whose own normal's support lies more than 100 tolerances beyond the smallest upper
+/// bound answers along the direction of that bound (status `Degenerate`: its points are
+/// the supports along it, not a closest pair).
 #[test]
 fn a_certified_stall_answers_along_its_upper_bound() {
     // sphere-on-a-sliver-hull-edge-d1bb2040 (narrow_phase, a 7-minute random run at

@@ -836,11 +836,16 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
             // and the next closest face is tried.
             let sat = *sat_upper.get_or_insert_with(|| sat_axis(pa, pb));
             if stall_is_certified(best, sat.1, face.distance, tol) {
-                // The depth is certified, not the face's normal (the support along it lies
-                // beyond the face by more than `tol`): the answer is taken along the
-                // direction of the smallest upper bound, which moves the cores apart, with
-                // the supports along it as points (so not `Converged`: they are not the
-                // closest pair).
+                // The depth is certified. The face's normal stands when the support along
+                // it is within `STALL_NORMAL_SLACK · tol` of the smallest upper bound (a
+                // sliver of a true face, tilted by rounding); otherwise (a plane through
+                // `D` that lost its meaning) the answer is taken along the direction of
+                // that bound, which moves the cores apart, with the supports along it as
+                // points (so not `Converged`: not a closest pair).
+                let smallest = best.map_or(sat.1, |(_, u)| scalar::min(u, sat.1));
+                if upper <= smallest + STALL_NORMAL_SLACK * tol {
+                    return converged(&poly, &face, tol, iterations);
+                }
                 return along_upper_bound(pa, pb, best, sat, EpaStatus::Degenerate, iterations);
             }
             if let Some(f) = poly.faces.get_mut(fi) {
@@ -873,6 +878,13 @@ fn epa_cores(pa: &Proxy, pb: &Proxy, gjk_simplex: &Simplex, caps: EpaCaps) -> Co
     }
     bounded_answer(pa, pb, best, status, iterations)
 }
+
+/// How far (in EPA tolerances) the support along a certified stalled face's normal may
+/// lie beyond the smallest upper bound for the face's normal to stand (1e-3 of `D`'s
+/// size). A sliver of a true face tilted by rounding stays well within it; a plane that
+/// lost its meaning (fuzz finding `sphere-on-a-sliver-hull-edge-d1bb2040`: 2.7 m along a
+/// normal whose bound was 0.05 mm) is far outside.
+const STALL_NORMAL_SLACK: f32 = 100.0;
 
 /// Whether a stalled face can stand as the answer. The depth lies between the closest
 /// face's distance `lower` (a lower bound while the polytope is convex and inside `D`) and
