@@ -119,9 +119,11 @@
 use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::pool::Pool;
-use super::solver::{is_active, is_moving_kinematic, SolverBody, NONE};
+use super::solver::{is_active, is_moving_kinematic, SolverBody};
 use crate::config::WorldConfig;
-use crate::math::{scalar, Mat3, Vec3};
+use crate::math::{scalar, Vec3};
+#[cfg(test)]
+use {super::solver::NONE, crate::math::Mat3};
 
 /// Rounds of the small accumulated solve the collision pass runs over one contact's
 /// colliding points. One is exact for a single point; four bring a flat face landing on
@@ -344,7 +346,7 @@ pub(crate) fn has_rigid_partner<const N: usize>(c: &Contact, bodies: &Pool<Body<
 
 /// `1 / k` for `k > 0` finite, else 0 (nothing moves along that row).
 #[inline]
-fn inverse_or_zero(k: f32) -> f32 {
+pub(crate) fn inverse_or_zero(k: f32) -> f32 {
     if k > 0.0 && k.is_finite() {
         1.0 / k
     } else {
@@ -353,7 +355,9 @@ fn inverse_or_zero(k: f32) -> f32 {
 }
 
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
-/// sensor, no point, or no moving dynamic body.
+/// sensor, no point, or no moving dynamic body. The reference the wide prepare
+/// (`wide/prepare.rs`, which the solver runs) is tested against, lane for lane.
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn prepare<const N: usize>(
     c: &Contact,
@@ -514,6 +518,7 @@ pub(crate) fn prepare<const N: usize>(
 /// The friction patch at the centre (lever arms `r_a`, `r_b`): Jacobians, the inverse
 /// tangent mass matrix, the warm-start impulse (kept in the static cone) and the
 /// sticking state (module docs).
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 fn prepare_patch(
     k: &mut ContactConstraint,
@@ -564,6 +569,7 @@ fn prepare_patch(
 }
 
 /// `Σ λ_n,i d_i`: the twist the patch's normal impulses can hold per unit of friction.
+#[cfg(test)]
 #[inline]
 fn twist_lever_sum(k: &ContactConstraint) -> f32 {
     let mut s = 0.0f32;
@@ -575,6 +581,7 @@ fn twist_lever_sum(k: &ContactConstraint) -> f32 {
 
 /// Rolling rows for manifolds of one or two points, the single-point twist coefficient,
 /// and the angular effective masses (module docs).
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 fn prepare_angular_rows(
     k: &mut ContactConstraint,
@@ -701,7 +708,7 @@ impl Pair {
 /// `v` shortened to length at most `radius` (a non-positive radius gives zero), and
 /// whether it was shortened.
 #[inline]
-fn clip_to_disc(v: [f32; 2], radius: f32) -> ([f32; 2], bool) {
+pub(crate) fn clip_to_disc(v: [f32; 2], radius: f32) -> ([f32; 2], bool) {
     if radius.is_nan() || radius <= 0.0 {
         return ([0.0, 0.0], v != [0.0, 0.0]);
     }

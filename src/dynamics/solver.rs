@@ -37,7 +37,7 @@ use heapless::Vec as HVec;
 
 use super::body::{Body, BodyKind};
 use super::contact::Contact;
-use super::contact_solver::{self, ContactConstraint};
+use super::contact_solver;
 use super::pool::Pool;
 use super::wide::{self, WideStore};
 use crate::config::WorldConfig;
@@ -247,33 +247,40 @@ fn plan<const N: usize, const C: usize>(
     let mut group = 0usize;
     let mut lane = 0usize;
     let mut last: Option<u32> = None;
-    let mut k = ContactConstraint::default();
+    let mut batch = [NONE; 4];
+    let mut overflow_from = None;
     let softness = contact_solver::Softness::for_contacts(cfg);
+    let (sb, si) = (&solver.bodies, &solver.index);
+    let mut prepare = |g: usize, batch: &[u32; 4]| {
+        if let Some(mut group) = store.group(g) {
+            wide::prepare_group(&mut group, batch, contacts, bodies, sb, si, &softness, cfg);
+        }
+    };
     for &(colour, ci) in scratch.iter() {
         if let Some(c) = last {
             if c != colour || lane == 4 {
+                prepare(group, &batch);
+                batch = [NONE; 4];
                 group += 1;
                 lane = 0;
             }
         }
         if colour == wide::OVERFLOW && last != Some(wide::OVERFLOW) {
-            store.overflow_from = group as u32;
+            overflow_from = Some(group as u32);
         }
         last = Some(colour);
-        let Some(c) = contacts.get(ci as usize) else {
-            continue;
-        };
-        let (sb, si) = (&solver.bodies, &solver.index);
-        if contact_solver::prepare(c, ci, bodies, sb, si, &softness, cfg, &mut k) {
-            if let Some(mut g) = store.group(group) {
-                g.store_lane(lane, &k);
-            }
+        if let Some(b) = batch.get_mut(lane) {
+            *b = ci;
         }
         lane += 1;
     }
-    if last != Some(wide::OVERFLOW) {
-        store.overflow_from = store.groups;
+    if last.is_some() {
+        prepare(group, &batch);
     }
+    store.overflow_from = match overflow_from {
+        Some(g) if last == Some(wide::OVERFLOW) => g,
+        _ => store.groups,
+    };
 }
 
 /// Reorder `scratch` (entries `(colour, contact)` in visit order, `count[c]` of colour
@@ -565,7 +572,131 @@ pub(crate) fn effective_mass(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::dynamics::body::{BodyDesc, Material};
     use crate::rng::SplitMix64;
+    use crate::shape::Shape;
+    use crate::world::World;
+
+    /// A world with every kind of lane the prepare meets: box stacks (four-point
+    /// patches), balls with rolling resistance and twist friction (one point), capsules
+    /// lying down (two points), a bouncing ball, a box sliding to a stop, a kinematic
+    /// paddle, and a static ground.
+    fn prepare_world() -> World<'static, 64, 512, 64> {
+        let mut w: World<64, 512, 64> = World::new();
+        let grippy = Material {
+            restitution: 0.0,
+            static_friction: 0.9,
+            kinetic_friction: 0.5,
+            rolling_resistance: 0.05,
+            twist_friction: 0.02,
+        };
+        let bouncy = Material {
+            restitution: 0.7,
+            ..grippy
+        };
+        let ground = Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap();
+        w.add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+            .unwrap();
+        let cube = Shape::cuboid(Vec3::new(0.5, 0.5, 0.5)).unwrap();
+        let mut rng = SplitMix64::new(17);
+        for i in 0..12 {
+            let x = (i % 4) as f32 * 1.3 - 2.0;
+            let y = 0.5 + (i / 4) as f32 * 1.01;
+            let q = Quat::from_axis_angle(Vec3::Y, rng.range(-0.1, 0.1));
+            w.add(
+                BodyDesc::dynamic(cube)
+                    .position(Vec3::new(x, y, 0.0))
+                    .rotation(q),
+            )
+            .unwrap();
+        }
+        let ball = Shape::sphere(0.3).unwrap();
+        for i in 0..6 {
+            let spin = Vec3::new(0.0, rng.range(-3.0, 3.0), rng.range(-3.0, 3.0));
+            w.add(
+                BodyDesc::dynamic(ball)
+                    .material(grippy)
+                    .position(Vec3::new(i as f32 - 3.0, 0.3, 3.0))
+                    .velocity(Vec3::new(rng.range(-1.0, 1.0), 0.0, 0.0))
+                    .angular_velocity(spin),
+            )
+            .unwrap();
+        }
+        w.add(
+            BodyDesc::dynamic(ball)
+                .material(bouncy)
+                .position(Vec3::new(3.0, 2.0, -3.0)),
+        )
+        .unwrap();
+        let rod = Shape::capsule(0.6, 0.2).unwrap();
+        for i in 0..3 {
+            let q = Quat::from_axis_angle(Vec3::Z, core::f32::consts::FRAC_PI_2);
+            w.add(
+                BodyDesc::dynamic(rod)
+                    .material(grippy)
+                    .rotation(q)
+                    .position(Vec3::new(i as f32 * 2.0 - 2.0, 0.2, -3.0)),
+            )
+            .unwrap();
+        }
+        w.add(
+            BodyDesc::dynamic(cube)
+                .position(Vec3::new(-5.0, 0.5, -5.0))
+                .velocity(Vec3::new(4.0, 0.0, 0.0)),
+        )
+        .unwrap();
+        w.add(
+            BodyDesc::kinematic(cube)
+                .position(Vec3::new(5.0, 0.6, 3.0))
+                .velocity(Vec3::new(-1.0, 0.0, 0.0)),
+        )
+        .unwrap();
+        w
+    }
+
+    /// The wide prepare (`wide/prepare.rs`) gives every lane the bits the scalar
+    /// `contact_solver::prepare` and `Group::store_lane` give it, at the start and in
+    /// the middle of a pile's motion (warm impulses, sticking and sliding patches).
+    #[test]
+    fn the_wide_prepare_gives_each_lane_the_scalar_prepare() {
+        let mut world = prepare_world();
+        let mut lanes = 0usize;
+        for step in 0..90 {
+            if step % 6 == 1 {
+                let mut w = world.clone();
+                let cfg = w.config;
+                gather(&mut w.solver, &mut w.bodies, &cfg, cfg.substep());
+                plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+                let mut reference = w.solver.store.clone();
+                let softness = contact_solver::Softness::for_contacts(&cfg);
+                let mut k = contact_solver::ContactConstraint::default();
+                for g in 0..reference.groups as usize {
+                    let mut group = reference.group(g).unwrap();
+                    for l in 0..4 {
+                        let ci = group.contact(l);
+                        if ci == NONE {
+                            continue;
+                        }
+                        let c = &w.contacts[ci as usize];
+                        let (sb, si) = (&w.solver.bodies, &w.solver.index);
+                        assert!(contact_solver::prepare(
+                            c, ci, &w.bodies, sb, si, &softness, &cfg, &mut k
+                        ));
+                        group.store_lane(l, &k);
+                        lanes += 1;
+                    }
+                }
+                // Debug output tells -0.0 from 0.0 and shows NaN: a bitwise comparison.
+                assert_eq!(
+                    std::format!("{:?}", w.solver.store),
+                    std::format!("{reference:?}"),
+                    "step {step}"
+                );
+            }
+            world.step();
+        }
+        assert!(lanes > 200, "{lanes} lanes compared");
+    }
 
     /// The counting placement gives the order of the sort it replaces: by final colour
     /// (each colour's last partial group moved to the overflow colour), then by visit

@@ -32,6 +32,8 @@
 //! have at most two (edges, capsules lying down) a kernel of two: the same velocities
 //! (an empty row can at most turn a velocity component of −0 into +0) for less work.
 
+mod prepare;
+
 use heapless::Vec as HVec;
 
 use super::contact::Contact;
@@ -40,6 +42,8 @@ use super::solver::{SolverBody, NONE};
 use crate::config::WorldConfig;
 use crate::math::lanes::{F4, V4};
 use crate::math::Vec3;
+
+pub(crate) use prepare::prepare_group;
 
 /// Colours of the constraint graph, overflow excluded (Box2D uses 24; a body rarely has
 /// more than a dozen contacts with other dynamic bodies).

@@ -208,6 +208,16 @@ impl V4 {
         self.x * o.x + self.y * o.y + self.z * o.z
     }
 
+    /// Cross product per lane, as [`Vec3::cross`].
+    #[inline]
+    pub fn cross(&self, o: &V4) -> V4 {
+        V4 {
+            x: self.y * o.z - self.z * o.y,
+            y: self.z * o.x - self.x * o.z,
+            z: self.x * o.y - self.y * o.x,
+        }
+    }
+
     /// Every lane scaled by its `s`.
     #[inline]
     pub fn scale(&self, s: F4) -> V4 {

@@ -1,0 +1,664 @@
+//! Prepare, four contacts side by side: the scalar `contact_solver::prepare` (and its
+//! patch and angular rows) run in the lanes of one group, written straight into the
+//! group's slots.
+//!
+//! Each lane performs the scalar prepare's operations in the scalar prepare's order (the
+//! lever arms, the Jacobians `r × n`, the products `I⁻¹ (r × n)`, the effective masses,
+//! the friction centre and the twist arms), so a lane holds the bits the scalar prepare
+//! and `Group::store_lane` give it (tested against them). Branches that differ per lane
+//! (a point past a contact's count, a body without a solver entry, a singular tangent
+//! mass, the stick state) are lane selects or short per-lane scalar steps. A lane whose
+//! contact does not push (a sensor, no point, no moving dynamic body) is left as it was,
+//! as the scalar plan leaves it: its contact index stays [`NONE`] and no pass reads it.
+
+use super::super::body::{Body, BodyKind};
+use super::super::contact::Contact;
+use super::super::contact_solver::{clip_to_disc, inverse_or_zero, Softness};
+use super::super::pool::Pool;
+use super::super::solver::{SolverBody, NONE};
+use super::*;
+use crate::config::WorldConfig;
+use crate::math::{scalar, Mat3, Quat};
+
+/// A 3×3 matrix per lane, by columns (as [`Mat3`]).
+#[derive(Clone, Copy, Default)]
+struct M4 {
+    x: V4,
+    y: V4,
+    z: V4,
+}
+
+impl M4 {
+    fn set(&mut self, l: usize, m: &Mat3) {
+        self.x.set(l, m.x);
+        self.y.set(l, m.y);
+        self.z.set(l, m.z);
+    }
+
+    /// `M v`, as [`Mat3::mul_vec`]: `(x vₓ + y v_y) + z v_z`.
+    #[inline]
+    fn mul_vec(&self, v: &V4) -> V4 {
+        self.x
+            .scale(v.x)
+            .add(&self.y.scale(v.y))
+            .add(&self.z.scale(v.z))
+    }
+
+    /// `Mᵀ v`, as [`Mat3::transpose_mul_vec`].
+    #[inline]
+    fn transpose_mul_vec(&self, v: &V4) -> V4 {
+        V4 {
+            x: self.x.dot(v),
+            y: self.y.dot(v),
+            z: self.z.dot(v),
+        }
+    }
+}
+
+/// A pose per lane: the rotation as a quaternion and the translation.
+#[derive(Clone, Copy, Default)]
+struct Pose4 {
+    u: V4,
+    w: F4,
+    position: V4,
+}
+
+impl Pose4 {
+    fn set(&mut self, l: usize, q: Quat, position: Vec3) {
+        self.u.set(l, q.xyz());
+        self.w.set(l, q.w);
+        self.position.set(l, position);
+    }
+
+    /// `R p + t`, as `Iso::transform_point` (`Quat::rotate`: `t = 2 u × p`,
+    /// `p + w t + u × t`).
+    #[inline]
+    fn transform_point(&self, p: &V4) -> V4 {
+        let t = self.u.cross(p).scale(F4::splat(2.0));
+        p.add(&t.scale(self.w))
+            .add(&self.u.cross(&t))
+            .add(&self.position)
+    }
+}
+
+/// What the rows read of the four contacts and their bodies, gathered lane by lane.
+#[derive(Default)]
+struct Inputs {
+    /// The lane's contact pushes (the scalar prepare would return true).
+    on: [bool; 4],
+    /// Point `j` exists in lane `l`: `point[j][l]`.
+    point: [[bool; 4]; 4],
+    len: [u8; 4],
+    has_a: [bool; 4],
+    has_b: [bool; 4],
+    m_a: F4,
+    m_b: F4,
+    i_a: M4,
+    i_b: M4,
+    rot_a: M4,
+    rot_b: M4,
+    va: V4,
+    wa: V4,
+    vb: V4,
+    wb: V4,
+    center_a: V4,
+    center_b: V4,
+    pose_a: Pose4,
+    pose_b: Pose4,
+    rho_a: F4,
+    rho_b: F4,
+    n: V4,
+    t1: V4,
+    t2: V4,
+    mu_s: F4,
+    local_a: [V4; 4],
+    local_b: [V4; 4],
+    separation: [F4; 4],
+    impulse: [F4; 4],
+}
+
+/// Prepare the contacts `lanes` (contact indices, [`NONE`] for a lane without one) into
+/// `group`: per lane exactly `contact_solver::prepare` followed by `Group::store_lane`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn prepare_group<const N: usize>(
+    group: &mut Group<'_>,
+    lanes: &[u32; 4],
+    contacts: &[Contact],
+    bodies: &Pool<Body<'_>, N>,
+    solver_bodies: &[SolverBody],
+    solver_index: &[u32; N],
+    softness: &[Softness; 2],
+    cfg: &WorldConfig,
+) {
+    let mut x = Inputs::default();
+    for (l, &ci) in lanes.iter().enumerate() {
+        if let Some(c) = contacts.get(ci as usize) {
+            gather_lane(group, &mut x, l, ci, c, bodies, solver_bodies, solver_index);
+        }
+    }
+    if x.on == [false; 4] {
+        return;
+    }
+    let s = [softness[0], softness[1]];
+    for l in 0..4 {
+        let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
+            continue;
+        };
+        if !x.on.get(l).copied().unwrap_or(false) {
+            continue;
+        }
+        let rigid = |slot: u32| {
+            bodies
+                .at(slot as usize)
+                .is_none_or(|b| b.kind != BodyKind::Dynamic)
+        };
+        let soft = if rigid(c.a) || rigid(c.b) { s[1] } else { s[0] };
+        let q0 = &mut group.s0.s;
+        set_lane(q0, BIAS_RATE, l, soft.bias_rate);
+        set_lane(q0, MASS_SCALE, l, soft.mass_scale);
+        set_lane(q0, IMPULSE_SCALE, l, soft.impulse_scale);
+    }
+    prepare_rows(group, &x, lanes, contacts, cfg);
+}
+
+/// Lane `l`'s inputs (contact `ci`), the checks of the scalar prepare, and the per-lane
+/// values the rows copy as they are.
+#[allow(clippy::too_many_arguments)]
+fn gather_lane<const N: usize>(
+    group: &mut Group<'_>,
+    x: &mut Inputs,
+    l: usize,
+    ci: u32,
+    c: &Contact,
+    bodies: &Pool<Body<'_>, N>,
+    solver_bodies: &[SolverBody],
+    solver_index: &[u32; N],
+) {
+    if c.sensor || c.len == 0 {
+        return;
+    }
+    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+        return;
+    };
+    let ia = solver_index.get(c.a as usize).copied().unwrap_or(NONE);
+    let ib = solver_index.get(c.b as usize).copied().unwrap_or(NONE);
+    let sa = solver_bodies.get(ia as usize);
+    let sb = solver_bodies.get(ib as usize);
+    let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    if m_a <= 0.0 && m_b <= 0.0 {
+        return;
+    }
+    if let Some(on) = x.on.get_mut(l) {
+        *on = true;
+    }
+    let n = c.normal;
+    let t1 = n.any_perpendicular();
+    let t2 = n.cross(t1);
+    x.m_a.set(l, m_a);
+    x.m_b.set(l, m_b);
+    x.i_a.set(l, &i_a);
+    x.i_b.set(l, &i_b);
+    x.rot_a.set(l, &sa.map_or(Mat3::IDENTITY, |s| s.rot));
+    x.rot_b.set(l, &sb.map_or(Mat3::IDENTITY, |s| s.rot));
+    if let (Some(a), Some(b)) = (x.has_a.get_mut(l), x.has_b.get_mut(l)) {
+        (*a, *b) = (sa.is_some(), sb.is_some());
+    }
+    let (va, wa) = sa.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
+    let (vb, wb) = sb.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
+    x.va.set(l, va);
+    x.wa.set(l, wa);
+    x.vb.set(l, vb);
+    x.wb.set(l, wb);
+    x.center_a.set(l, body_a.world_center());
+    x.center_b.set(l, body_b.world_center());
+    x.pose_a.set(l, body_a.pose.rotation, body_a.pose.position);
+    x.pose_b.set(l, body_b.pose.rotation, body_b.pose.position);
+    x.rho_a.set(l, body_a.shape.radius());
+    x.rho_b.set(l, body_b.shape.radius());
+    x.n.set(l, n);
+    x.t1.set(l, t1);
+    x.t2.set(l, t2);
+    let m = c.material;
+    x.mu_s.set(l, m.static_friction);
+    let len = c.points().len().min(4);
+    if let Some(v) = x.len.get_mut(l) {
+        *v = len as u8;
+    }
+    for (j, p) in c.points().iter().enumerate().take(4) {
+        if let Some(on) = x.point.get_mut(j).and_then(|row| row.get_mut(l)) {
+            *on = true;
+        }
+        if let (Some(a), Some(b), Some(s), Some(i)) = (
+            x.local_a.get_mut(j),
+            x.local_b.get_mut(j),
+            x.separation.get_mut(j),
+            x.impulse.get_mut(j),
+        ) {
+            a.set(l, p.local_a);
+            b.set(l, p.local_b);
+            s.set(l, p.separation);
+            i.set(l, p.normal_impulse);
+        }
+    }
+    let q0 = &mut group.s0.s;
+    set_lane_v(q0, NORMAL, l, n);
+    set_lane_v(q0, T1, l, t1);
+    set_lane_v(q0, T2, l, t2);
+    set_lane(q0, INV_MASS_A, l, m_a);
+    set_lane(q0, INV_MASS_B, l, m_b);
+    set_lane(q0, MU_S, l, m.static_friction);
+    set_lane(q0, MU_K, l, m.kinetic_friction);
+    set_lane(q0, RESTITUTION, l, m.restitution);
+    if let Some(v) = group.s0.idx.get_mut(l) {
+        *v = if sa.is_some() { ia } else { NONE };
+    }
+    if let Some(v) = group.s1.idx.get_mut(l) {
+        *v = if sb.is_some() { ib } else { NONE };
+    }
+    if let Some(v) = group.s2.idx.get_mut(l) {
+        *v = ci;
+    }
+}
+
+/// Lane-wise `f` of one value.
+#[inline]
+fn per_lane(x: F4, f: impl Fn(f32) -> f32) -> F4 {
+    let [a, b, c, d] = x.0;
+    F4([f(a), f(b), f(c), f(d)])
+}
+
+/// `if mask { a } else { b }`, lane-wise, for vectors.
+#[inline]
+fn select_v(mask: [bool; 4], a: &V4, b: &V4) -> V4 {
+    V4 {
+        x: b.x.select_where(mask, a.x),
+        y: b.y.select_where(mask, a.y),
+        z: b.z.select_where(mask, a.z),
+    }
+}
+
+/// Write `v` into the lanes of `dst` where `on` (all four: a plain copy).
+#[inline]
+fn put(dst: &mut F4, on: [bool; 4], v: F4) {
+    *dst = if on == ALL_LANES {
+        v
+    } else {
+        dst.select_where(on, v)
+    };
+}
+
+/// Write `v` into the lanes of `dst` where `on`.
+#[inline]
+fn put_v(dst: &mut V4, on: [bool; 4], v: &V4) {
+    *dst = if on == ALL_LANES {
+        *v
+    } else {
+        select_v(on, v, dst)
+    };
+}
+
+/// `v` where `on`, zero elsewhere.
+#[inline]
+fn keep(on: [bool; 4], v: F4) -> F4 {
+    if on == ALL_LANES {
+        v
+    } else {
+        F4::ZERO.select_where(on, v)
+    }
+}
+
+/// `v` where `on`, zero elsewhere.
+#[inline]
+fn keep_v(on: [bool; 4], v: &V4) -> V4 {
+    if on == ALL_LANES {
+        *v
+    } else {
+        select_v(on, v, &V4::default())
+    }
+}
+
+/// Write `v` into the lanes of quarter entry `at..at + 3` where `on`.
+#[inline]
+fn put_q(q: &mut [F4; QUARTER], at: usize, on: [bool; 4], v: &V4) {
+    for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
+        if let Some(d) = q.get_mut(at + i) {
+            put(d, on, c);
+        }
+    }
+}
+
+/// The normal rows, the friction centre, the patch and the angular rows of the lanes
+/// in `x.on` (module docs).
+fn prepare_rows(
+    group: &mut Group<'_>,
+    x: &Inputs,
+    lanes: &[u32; 4],
+    contacts: &[Contact],
+    cfg: &WorldConfig,
+) {
+    let on = x.on;
+    let zero = F4::ZERO;
+    let n = &x.n;
+    let radius_sum = x.rho_a + x.rho_b;
+    let speed_bound = F4::splat(2.0 * cfg.max_linear_speed + cfg.max_push_speed);
+    let adjusted = n.dot(&x.center_b.sub(&x.center_a)) - radius_sum;
+    let (n_rho_a, n_rho_b) = (n.scale(x.rho_a), n.scale(x.rho_b));
+    let mut plain = V4::default();
+    let mut carried = zero;
+    let mut largest = zero;
+    let mut mids = [V4::default(); 4];
+    let mut cores = [(V4::default(), V4::default()); 4];
+    let mut impulses = [zero; 4];
+    // The point rows some lane has (a group of spheres has one).
+    let rows = usize::from(x.len.iter().copied().max().unwrap_or(0)).min(4);
+    for j in 0..rows {
+        let Some(&here) = x.point.get(j) else {
+            break;
+        };
+        let (Some(la), Some(lb)) = (x.local_a.get(j), x.local_b.get(j)) else {
+            break;
+        };
+        let p_a = x.pose_a.transform_point(la);
+        let p_b = x.pose_b.transform_point(lb);
+        let r_a = p_a.sub(&x.center_a);
+        let r_b = p_b.sub(&x.center_b);
+        let core_a = r_a.sub(&n_rho_a);
+        let core_b = r_b.add(&n_rho_b);
+        let rn_a = r_a.cross(n);
+        let rn_b = r_b.cross(n);
+        let in_a = x.i_a.mul_vec(&rn_a);
+        let in_b = x.i_b.mul_vec(&rn_b);
+        let k = x.m_a + x.m_b + rn_a.dot(&in_a) + rn_b.dot(&in_b);
+        let normal_mass = per_lane(k, inverse_or_zero);
+        let closing =
+            x.vb.add(&x.wb.cross(&r_b))
+                .sub(&x.va.add(&x.wa.cross(&r_a)));
+        let vn = closing.dot(n);
+        let stored = x.impulse.get(j).copied().unwrap_or_default();
+        let cap = normal_mass * speed_bound;
+        let impulse = F4(core::array::from_fn(|l| {
+            scalar::min(stored.lane(l), cap.lane(l))
+        }));
+        // A body without a solver entry keeps its world lever arm as its anchor.
+        let local_a = select_v(x.has_a, &x.rot_a.transpose_mul_vec(&core_a), &core_a);
+        let local_b = select_v(x.has_b, &x.rot_b.transpose_mul_vec(&core_b), &core_b);
+        let mid = p_a.add(&p_b).scale(F4::splat(0.5));
+        plain = select_v(here, &plain.add(&mid), &plain);
+        carried = carried.select_where(here, carried + impulse);
+        largest = largest.select_where(here, largest.max(impulse));
+        if let (Some(m), Some(c), Some(i)) =
+            (mids.get_mut(j), cores.get_mut(j), impulses.get_mut(j))
+        {
+            *m = mid;
+            *c = (core_a, core_b);
+            *i = impulse;
+        }
+        // Points past a lane's count are empty: zero in every field.
+        let sep = x.separation.get(j).copied().unwrap_or_default();
+        let p = group.point_mut(j);
+        put_v(&mut p.local_a, on, &keep_v(here, &local_a));
+        put_v(&mut p.local_b, on, &keep_v(here, &local_b));
+        put(&mut p.adjusted, on, keep(here, adjusted));
+        put_v(&mut p.rn_a, on, &keep_v(here, &rn_a));
+        put_v(&mut p.rn_b, on, &keep_v(here, &rn_b));
+        put_v(&mut p.in_a, on, &keep_v(here, &in_a));
+        put_v(&mut p.in_b, on, &keep_v(here, &in_b));
+        put(&mut p.normal_mass, on, keep(here, normal_mass));
+        put(&mut p.normal_impulse, on, keep(here, impulse));
+        put(&mut p.separation, on, keep(here, sep));
+        put(&mut p.separation0, on, keep(here, sep));
+        put(&mut p.total_impulse, on, zero);
+        put(&mut p.normal_speed0, on, keep(here, vn));
+        put(&mut p.bounced, on, zero);
+    }
+    // Point rows no lane has: empty.
+    for j in rows..4 {
+        let p = group.point_mut(j);
+        let zero_v = V4::default();
+        for v in [&mut p.local_a, &mut p.local_b, &mut p.rn_a, &mut p.rn_b] {
+            put_v(v, on, &zero_v);
+        }
+        for v in [&mut p.in_a, &mut p.in_b] {
+            put_v(v, on, &zero_v);
+        }
+        for v in [
+            &mut p.adjusted,
+            &mut p.normal_mass,
+            &mut p.normal_impulse,
+            &mut p.twist_arm,
+            &mut p.separation,
+            &mut p.separation0,
+            &mut p.total_impulse,
+            &mut p.normal_speed0,
+            &mut p.bounced,
+        ] {
+            put(v, on, zero);
+        }
+    }
+    // The friction centre: the points' mean weighted by last step's normal impulses
+    // relative to the largest, or their plain mean.
+    let count = F4(x.len.map(f32::from));
+    let mut weighted = V4::default();
+    let mut weight = zero;
+    for j in 0..rows {
+        let (Some(&here), Some(mid), Some(&impulse)) =
+            (x.point.get(j), mids.get(j), impulses.get(j))
+        else {
+            break;
+        };
+        let w = impulse.div(largest);
+        weighted = select_v(here, &weighted.add(&mid.scale(w)), &weighted);
+        weight = weight.select_where(here, weight + w);
+    }
+    let one = F4::splat(1.0);
+    let center = select_v(
+        core::array::from_fn(|l| largest.lane(l) > 0.0),
+        &weighted.scale(one.div(weight)),
+        &plain.scale(one.div(count)),
+    );
+    let mut arms = [zero; 4];
+    for j in 0..rows {
+        let (Some(&here), Some((core_a, core_b))) = (x.point.get(j), cores.get(j)) else {
+            break;
+        };
+        let mid = x
+            .center_a
+            .add(core_a)
+            .add(&n_rho_a)
+            .add(&x.center_b)
+            .add(core_b)
+            .sub(&n_rho_b)
+            .scale(F4::splat(0.5));
+        let d = mid.sub(&center);
+        let arm = keep(here, d.dot(&d).sqrt());
+        if let Some(a) = arms.get_mut(j) {
+            *a = arm;
+        }
+        put(&mut group.point_mut(j).twist_arm, on, arm);
+    }
+    let r_a = center.sub(&x.center_a);
+    let r_b = center.sub(&x.center_b);
+    prepare_patch(group, x, &r_a, &r_b, &impulses, &arms, lanes, contacts, cfg);
+    let flags: [u32; 4] = core::array::from_fn(|l| {
+        let est = carried.lane(l) > 0.0;
+        u32::from(x.len.get(l).copied().unwrap_or(0)) | if est { ESTABLISHED } else { 0 }
+    });
+    for (l, f) in flags.iter().enumerate() {
+        if on.get(l).copied().unwrap_or(false) {
+            if let Some(v) = group.s3.idx.get_mut(l) {
+                // The sticking bit was set by the patch.
+                *v = (*v & STICKING) | f;
+            }
+        }
+    }
+    prepare_angular_rows(group, x, &r_a, &r_b, lanes, contacts, radius_sum);
+}
+
+/// The friction patch at the centre (lever arms `r_a`, `r_b`), as
+/// `contact_solver::prepare_patch`; sets each lane's sticking bit.
+#[allow(clippy::too_many_arguments)]
+fn prepare_patch(
+    group: &mut Group<'_>,
+    x: &Inputs,
+    r_a: &V4,
+    r_b: &V4,
+    impulses: &[F4; 4],
+    arms: &[F4; 4],
+    lanes: &[u32; 4],
+    contacts: &[Contact],
+    cfg: &WorldConfig,
+) {
+    let on = x.on;
+    let rt_a = [r_a.cross(&x.t1), r_a.cross(&x.t2)];
+    let rt_b = [r_b.cross(&x.t1), r_b.cross(&x.t2)];
+    let it_a = [x.i_a.mul_vec(&rt_a[0]), x.i_a.mul_vec(&rt_a[1])];
+    let it_b = [x.i_b.mul_vec(&rt_b[0]), x.i_b.mul_vec(&rt_b[1])];
+    let m = x.m_a + x.m_b;
+    let kxx = m + rt_a[0].dot(&it_a[0]) + rt_b[0].dot(&it_b[0]);
+    let kyy = m + rt_a[1].dot(&it_a[1]) + rt_b[1].dot(&it_b[1]);
+    let kxy = rt_a[0].dot(&it_a[1]) + rt_b[0].dot(&it_b[1]);
+    let det = kxx * kyy - kxy * kxy;
+    let dv = x.vb.add(&x.wb.cross(r_b)).sub(&x.va.add(&x.wa.cross(r_a)));
+    let slip = dv.sub(&x.n.scale(dv.dot(&x.n)));
+    let slip2 = slip.dot(&slip);
+    let q1 = &mut group.s1.s;
+    put_q(q1, RT_A0, on, &rt_a[0]);
+    put_q(q1, RT_A1, on, &rt_a[1]);
+    put_q(q1, RT_B0, on, &rt_b[0]);
+    put_q(q1, RT_B1, on, &rt_b[1]);
+    let q2 = &mut group.s2.s;
+    put_q(q2, IT_A0, on, &it_a[0]);
+    put_q(q2, IT_A1, on, &it_a[1]);
+    put_q(q2, IT_B0, on, &it_b[0]);
+    put_q(q2, IT_B1, on, &it_b[1]);
+    for l in 0..4 {
+        if !on.get(l).copied().unwrap_or(false) {
+            continue;
+        }
+        let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
+            continue;
+        };
+        let len = usize::from(x.len.get(l).copied().unwrap_or(0));
+        let (kxx, kyy, kxy, det) = (kxx.lane(l), kyy.lane(l), kxy.lane(l), det.lane(l));
+        let tangent_mass = if det > 0.0 && det.is_finite() {
+            let inv = 1.0 / det;
+            [kyy * inv, -kxy * inv, kxx * inv]
+        } else {
+            [inverse_or_zero(kxx), 0.0, inverse_or_zero(kyy)]
+        };
+        let total: f32 = impulses.iter().take(len).map(|i| i.lane(l)).sum();
+        let (n, t1, t2) = (x.n.lane(l), x.t1.lane(l), x.t2.lane(l));
+        let mu_s = x.mu_s.lane(l);
+        let tangent = c.friction_impulse - n * c.friction_impulse.dot(n);
+        let (clipped, _) = clip_to_disc([tangent.dot(t1), tangent.dot(t2)], mu_s * total);
+        let sticking =
+            c.sticking || slip2.lane(l) < cfg.stick_speed * cfg.stick_speed || total <= 0.0;
+        let mut levers = 0.0f32;
+        for (i, a) in impulses.iter().zip(arms).take(len) {
+            levers += i.lane(l) * a.lane(l);
+        }
+        let twist_limit = mu_s * levers;
+        let twist = scalar::clamp(c.twist_impulse, -twist_limit, twist_limit);
+        let q1 = &mut group.s1.s;
+        for (i, v) in tangent_mass.iter().enumerate() {
+            set_lane(q1, TANGENT_MASS + i, l, *v);
+        }
+        set_lane(q1, TANGENT_IMPULSE, l, clipped[0]);
+        set_lane(q1, TANGENT_IMPULSE + 1, l, clipped[1]);
+        let q2 = &mut group.s2.s;
+        set_lane(q2, ANGULAR_IMPULSE, l, 0.0);
+        set_lane(q2, ANGULAR_IMPULSE + 1, l, 0.0);
+        set_lane(q2, ANGULAR_IMPULSE + 2, l, twist);
+        if let Some(v) = group.s3.idx.get_mut(l) {
+            *v = if sticking { STICKING } else { 0 };
+        }
+    }
+}
+
+/// Rolling rows for manifolds of one or two points, the single-point twist coefficient
+/// and the angular effective masses, as `contact_solver::prepare_angular_rows`.
+fn prepare_angular_rows(
+    group: &mut Group<'_>,
+    x: &Inputs,
+    r_a: &V4,
+    r_b: &V4,
+    lanes: &[u32; 4],
+    contacts: &[Contact],
+    radius_sum: F4,
+) {
+    let on = x.on;
+    let mut rolling = F4::ZERO;
+    let mut twist = F4::ZERO;
+    for l in 0..4 {
+        if !on.get(l).copied().unwrap_or(false) {
+            continue;
+        }
+        let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
+            continue;
+        };
+        let len = x.len.get(l).copied().unwrap_or(0);
+        let m = c.material;
+        let rolls = len <= 2 && m.rolling_resistance > 0.0;
+        let twists = len == 1 && m.twist_friction > 0.0;
+        if rolls || twists {
+            let lever = match (x.m_a.lane(l) > 0.0, x.m_b.lane(l) > 0.0) {
+                (true, true) => scalar::min(r_a.lane(l).length(), r_b.lane(l).length()),
+                (true, false) => r_a.lane(l).length(),
+                _ => r_b.lane(l).length(),
+            };
+            rolling.set(
+                l,
+                if rolls {
+                    m.rolling_resistance * lever
+                } else {
+                    0.0
+                },
+            );
+            twist.set(
+                l,
+                if twists {
+                    m.twist_friction * lever
+                } else {
+                    0.0
+                },
+            );
+        }
+    }
+    // The tangent rows only where the manifold rolls; the twist row always (the patch).
+    let rolls: [bool; 4] = core::array::from_fn(|l| rolling.lane(l) > 0.0);
+    let q0 = &mut group.s0.s;
+    if let Some(d) = q0.get_mut(ROLLING) {
+        put(d, on, rolling);
+    }
+    if let Some(d) = q0.get_mut(TWIST) {
+        put(d, on, twist);
+    }
+    let q1 = &mut group.s1.s;
+    if let Some(d) = q1.get_mut(RADIUS_SUM) {
+        put(d, on, radius_sum);
+    }
+    let axes = [x.t1, x.t2, x.n];
+    for (i, d) in axes.iter().enumerate() {
+        let wanted = if i == 2 { [true; 4] } else { rolls };
+        let ia = x.i_a.mul_vec(d);
+        let ib = x.i_b.mul_vec(d);
+        let mass = per_lane(d.dot(&ia) + d.dot(&ib), inverse_or_zero);
+        let zero_v = V4::default();
+        put_q(
+            &mut group.s3.s,
+            IA_AXES + 3 * i,
+            on,
+            &select_v(wanted, &ia, &zero_v),
+        );
+        put_q(
+            &mut group.s3.s,
+            IB_AXES + 3 * i,
+            on,
+            &select_v(wanted, &ib, &zero_v),
+        );
+        if let Some(dst) = group.s2.s.get_mut(AXIS_MASS + i) {
+            put(dst, on, F4::ZERO.select_where(wanted, mass));
+        }
+    }
+}
