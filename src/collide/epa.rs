@@ -88,9 +88,10 @@ pub enum EpaStatus {
     /// The iteration cap was hit; the answer is the best found so far.
     IterationLimit,
     /// The Minkowski difference was too thin to expand, or too flat at the converged face
-    /// for its witness points, or the closest face was a sliver whose depth an upper bound
-    /// certified; a fallback (depth and normal bound the overlap, the points are the
-    /// supports along the normal) was given.
+    /// for its witness points, or the closest face stalled with its depth certified by an
+    /// upper bound while the support along its own normal lies far beyond that depth (a
+    /// sliver, not a true face); a fallback (depth and normal bound the overlap, the
+    /// points are the supports along the normal) was given.
     Degenerate,
 }
 

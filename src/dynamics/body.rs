@@ -377,9 +377,11 @@ pub(crate) struct Body<'a> {
     /// Set when `fat` was replaced (or the body was added or teleported): the broad phase
     /// looks for the body's new pairs and clears it.
     pub moved: bool,
-    /// A box (world, m) around the shape at `pose`, formed at the start of each narrow
-    /// phase ([`Body::refresh_bounds`]) for its test of empty pairs. Derived, not state: a
-    /// snapshot neither holds nor needs it.
+    /// A box (world, m) around the shape at `pose` for the narrow phase's test of empty
+    /// pairs ([`Body::refresh_bounds`]), formed each step: by the broad phase for the
+    /// bodies whose movement bounds it forms (awake, not static), at the start of the
+    /// narrow phase for the others. Derived, not state: a snapshot neither holds nor
+    /// needs it.
     pub bounds: Aabb,
 }
 
@@ -509,6 +511,7 @@ impl<'a> Body<'a> {
             bounds: d.shape.aabb(&pose),
         };
         b.update_inertia();
+        b.refresh_bounds();
         Ok(b)
     }
 
@@ -516,15 +519,39 @@ impl<'a> Body<'a> {
     /// few products (sphere, capsule, cuboid, triangle), else the box of its bounding
     /// sphere about the body's origin (a hull's exact box is a pass over its vertices).
     pub fn refresh_bounds(&mut self) {
-        self.bounds = match self.shape {
-            Shape::Sphere(_) | Shape::Capsule(_) | Shape::Cuboid(_) | Shape::Triangle(_) => {
-                self.shape.aabb(&self.pose)
-            }
-            _ => Aabb::from_center_half(
-                self.pose.position,
-                Vec3::splat(self.shape.bounding_radius()),
-            ),
+        self.bounds = if self.exact_bounds() {
+            self.shape.aabb(&self.pose)
+        } else {
+            self.sphere_bounds()
         };
+    }
+
+    /// [`Body::refresh_bounds`] given the shape's exact box at the current pose (the
+    /// broad phase forms it anyway).
+    pub fn refresh_bounds_from(&mut self, exact: Aabb) {
+        self.bounds = if self.exact_bounds() {
+            exact
+        } else {
+            self.sphere_bounds()
+        };
+    }
+
+    /// True when [`Body::bounds`] is the shape's exact box.
+    #[inline]
+    fn exact_bounds(&self) -> bool {
+        matches!(
+            self.shape,
+            Shape::Sphere(_) | Shape::Capsule(_) | Shape::Cuboid(_) | Shape::Triangle(_)
+        )
+    }
+
+    /// The box of the shape's bounding sphere about the body's origin.
+    #[inline]
+    fn sphere_bounds(&self) -> Aabb {
+        Aabb::from_center_half(
+            self.pose.position,
+            Vec3::splat(self.shape.bounding_radius()),
+        )
     }
 
     /// True for a dynamic body.

@@ -403,11 +403,14 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
             arc.map_or(b, |a| b.expanded(a))
                 .expanded(cfg.speculative_margin)
         };
+        // The shape's box now: the narrow phase's bounds and the cover's start.
+        let now = body.shape.aabb(&motion.pose);
+        body.refresh_bounds_from(now);
         // Most bodies stay well inside their enlarged box: a cheap cover of the movement
         // bounds settles it (the same answer: the bounds lie inside the cover).
         if body
             .fat
-            .contains(&grown(movement_cover(&body.shape, &motion, cfg.dt)))
+            .contains(&grown(movement_cover(&body.shape, &motion, now, cfg.dt)))
         {
             continue;
         }
@@ -473,12 +476,11 @@ fn body_motion(body: &Body<'_>, cfg: &WorldConfig) -> (Motion, Option<f32>) {
 }
 
 /// A box that holds [`movement_bounds`]`(shape, motion, dt)`, for about a tenth of its
-/// cost (no rotation is integrated and the shape's box is taken once): the shape's box
-/// now and moved by `v dt`, grown by how far a turn of `W = |ω| dt` moves a point within
-/// the shape's bounding radius `R` of the origin (a chord, at most `R W`), by the bulge
-/// the bounds allow (`R W² / 7`) and by a rounding guard ten times theirs.
-fn movement_cover(shape: &Shape<'_>, motion: &Motion, dt: f32) -> Aabb {
-    let now = shape.aabb(&motion.pose);
+/// cost (no rotation is integrated; `now` is the shape's box at `motion.pose`): that
+/// box and the same box moved by `v dt`, grown by how far a turn of `W = |ω| dt` moves a
+/// point within the shape's bounding radius `R` of the origin (a chord, at most `R W`),
+/// by the bulge the bounds allow (`R W² / 7`) and by a rounding guard ten times theirs.
+fn movement_cover(shape: &Shape<'_>, motion: &Motion, now: Aabb, dt: f32) -> Aabb {
     let shift = motion.linear * dt;
     let r = shape.bounding_radius();
     let w = motion.angular.length() * scalar::abs(dt);
@@ -825,7 +827,7 @@ mod tests {
             };
             let dt = 1.0 / 60.0;
             let exact = movement_bounds(&shape, &motion, dt);
-            let cover = movement_cover(&shape, &motion, dt);
+            let cover = movement_cover(&shape, &motion, shape.aabb(&motion.pose), dt);
             assert!(
                 cover.contains(&exact),
                 "case {i}: {cover:?} misses {exact:?}"

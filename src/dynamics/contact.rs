@@ -88,7 +88,7 @@ use heapless::Vec as HVec;
 
 use crate::collide::{contact_cached_unchecked, Manifold, PairCache};
 use crate::config::{WorldConfig, REUSE_SLACK};
-use crate::dynamics::body::{Body, Material};
+use crate::dynamics::body::{Body, BodyKind, Material};
 use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
 use crate::dynamics::mid_phase;
@@ -381,8 +381,11 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     events: &mut HVec<Event, E>,
     report: &mut StepReport,
 ) {
+    // The broad phase formed the bounds of the bodies it moves (`update_fat_boxes`).
     for (_, body) in bodies.iter_mut() {
-        body.refresh_bounds();
+        if body.kind == BodyKind::Static || !body.awake {
+            body.refresh_bounds();
+        }
     }
     let bodies = &*bodies;
     let mut write = 0usize;
@@ -592,7 +595,6 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         && apart(body_a, body_b, cfg.speculative_margin + reach + REUSE_SLACK)
     {
         // No point, as a build or a reuse would give, for the price of a box test.
-        c.len = 0;
         c.touching = false;
         c.built_margin = -1.0;
         keep_patch_in_plane(c);
