@@ -110,7 +110,8 @@ pub(crate) struct ContactPoint {
     /// Accumulated normal impulse of one sub-step (N·s), ≥ 0.
     pub normal_impulse: f32,
     /// Normal closing speed before the solve (m/s; positive when approaching), at the
-    /// midpoint of the two anchors, for hit events.
+    /// midpoint of the two anchors, for hit events: formed when the points are built, and
+    /// on a reuse only when the contact may be due a hit (`reuse`).
     pub approach_speed: f32,
 }
 
@@ -795,15 +796,27 @@ fn relative_drift(from: &Iso, to: &Iso, radius_b: f32) -> f32 {
 fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
     let n = body_a.pose.transform_vector(c.normal_local);
     c.normal = n;
+    let was_touching = c.touching;
     c.touching = false;
     let len = usize::from(c.len);
     for p in c.points.iter_mut().take(len) {
         let p_a = body_a.pose.transform_point(p.local_a);
         let p_b = body_b.pose.transform_point(p.local_b);
         p.separation = (p_b - p_a).dot(n);
-        let mid = (p_a + p_b) * 0.5;
-        p.approach_speed = (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(n);
         c.touching |= p.separation <= cfg.slop;
+    }
+    // Closing speeds are read by hit events only: a convex pair with points is due one
+    // when it starts touching (`update_one`); a part contact whenever its group is.
+    if c.is_part() || (c.touching && !was_touching) {
+        let (center_a, center_b) = (body_a.world_center(), body_b.world_center());
+        for p in c.points.iter_mut().take(len) {
+            let p_a = body_a.pose.transform_point(p.local_a);
+            let p_b = body_b.pose.transform_point(p.local_b);
+            let mid = (p_a + p_b) * 0.5;
+            let v_a = body_a.linear_velocity + body_a.angular_velocity.cross(mid - center_a);
+            let v_b = body_b.linear_velocity + body_b.angular_velocity.cross(mid - center_b);
+            p.approach_speed = (v_a - v_b).dot(n);
+        }
     }
 }
 
