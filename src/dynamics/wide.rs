@@ -801,11 +801,23 @@ fn solve_group<const ROWS: usize>(
     let sh = Shared::load(&group.s0.s);
     let n = sh.n;
     let (body_a, body_b) = (four(bodies, &ia), four(bodies, &ib));
+    // The separations first: they depend on the positions only, and the velocity rows
+    // below then keep fewer values live.
+    {
+        let reach_a = NormalReach::gather(&body_a, &n);
+        let reach_b = NormalReach::gather(&body_b, &n);
+        let moved = reach_b.along - reach_a.along;
+        for j in 0..ROWS {
+            let p = group.point_mut(j);
+            // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
+            //   = adjusted + (n·Δp_b − n·Δp_a) + ((R_bᵀ n)·l_b − (R_aᵀ n)·l_a)
+            let turned = reach_b.local.dot(&p.local_b) - reach_a.local.dot(&p.local_a);
+            let s = p.adjusted + (moved + turned);
+            p.separation = p.separation.select_where(mask, s);
+        }
+    }
     let mut a = Bodies4::of(&body_a);
     let mut b = Bodies4::of(&body_b);
-    let reach_a = NormalReach::gather(&body_a, &n);
-    let reach_b = NormalReach::gather(&body_b, &n);
-    let moved = reach_b.along - reach_a.along;
     let (one, zero) = (F4::splat(1.0), F4::ZERO);
     let (soft_bias, soft_mass, soft_impulse) = if use_bias {
         (
@@ -822,10 +834,8 @@ fn solve_group<const ROWS: usize>(
     let mut levers = zero;
     for j in 0..ROWS {
         let p = group.point_mut(j);
-        // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
-        //   = adjusted + (n·Δp_b − n·Δp_a) + ((R_bᵀ n)·l_b − (R_aᵀ n)·l_a)
-        let turned = reach_b.local.dot(&p.local_b) - reach_a.local.dot(&p.local_a);
-        let s = p.adjusted + (moved + turned);
+        // This pass's separation in the lanes of `mask` (the others' rows are dropped).
+        let s = p.separation;
         // Speculative (s > 0): rigid, close the gap; else soft push-out (or none).
         let soft_push = (soft_bias * s).max(max_push);
         let bias = s.gt_select(zero, s * inv_h, soft_push);
@@ -855,7 +865,6 @@ fn solve_group<const ROWS: usize>(
         p.normal_speed0 = s0.select_where(mask, first);
         p.normal_impulse = new;
         p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
-        p.separation = p.separation.select_where(mask, s);
     }
     solve_patch(group, &sh, &mut a, &mut b, cfg, total, levers, last, mask);
     solve_rolling(group, &sh, &mut a, &mut b, total, mask);
