@@ -639,26 +639,22 @@ fn prepare_angular_rows(
         put(d, on, radius_sum);
     }
     let axes = [x.t1, x.t2, x.n];
+    let zero_v = V4::default();
     for (i, d) in axes.iter().enumerate() {
-        let wanted = if i == 2 { [true; 4] } else { rolls };
-        let ia = x.i_a.mul_vec(d);
-        let ib = x.i_b.mul_vec(d);
-        let mass = per_lane(d.dot(&ia) + d.dot(&ib), inverse_or_zero);
-        let zero_v = V4::default();
-        put_q(
-            &mut group.s3.s,
-            IA_AXES + 3 * i,
-            on,
-            &select_v(wanted, &ia, &zero_v),
-        );
-        put_q(
-            &mut group.s3.s,
-            IB_AXES + 3 * i,
-            on,
-            &select_v(wanted, &ib, &zero_v),
-        );
+        let wanted = if i == 2 { ALL_LANES } else { rolls };
+        let (ia, ib, mass) = if wanted == [false; 4] {
+            // No lane rolls: the tangent rows are empty.
+            (zero_v, zero_v, F4::ZERO)
+        } else {
+            let ia = x.i_a.mul_vec(d);
+            let ib = x.i_b.mul_vec(d);
+            let mass = per_lane(d.dot(&ia) + d.dot(&ib), inverse_or_zero);
+            (ia, ib, mass)
+        };
+        put_q(&mut group.s3.s, IA_AXES + 3 * i, on, &keep_v(wanted, &ia));
+        put_q(&mut group.s3.s, IB_AXES + 3 * i, on, &keep_v(wanted, &ib));
         if let Some(dst) = group.s2.s.get_mut(AXIS_MASS + i) {
-            put(dst, on, F4::ZERO.select_where(wanted, mass));
+            put(dst, on, keep(wanted, mass));
         }
     }
 }
