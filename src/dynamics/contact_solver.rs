@@ -119,11 +119,10 @@
 use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::pool::Pool;
+use super::solver::NONE;
 use super::solver::{is_active, is_moving_kinematic, SolverBody};
 use crate::config::WorldConfig;
-use crate::math::{scalar, Vec3};
-#[cfg(test)]
-use {super::solver::NONE, crate::math::Mat3};
+use crate::math::{scalar, Mat3, Vec3};
 
 /// Rounds of the small accumulated solve the collision pass runs over one contact's
 /// colliding points. One is exact for a single point; four bring a flat face landing on
@@ -354,6 +353,67 @@ pub(crate) fn inverse_or_zero(k: f32) -> f32 {
     }
 }
 
+/// The two bodies of a contact that pushes, as the rows see them.
+pub(crate) struct Sides<'s, 'a> {
+    /// Body A.
+    pub body_a: &'s Body<'a>,
+    /// Body B.
+    pub body_b: &'s Body<'a>,
+    /// A's solver body, `None` for a body that does not move in the solve.
+    pub sa: Option<&'s SolverBody>,
+    /// B's solver body.
+    pub sb: Option<&'s SolverBody>,
+    /// A's solver index ([`NONE`] without a solver body).
+    pub ia: u32,
+    /// B's solver index.
+    pub ib: u32,
+    /// A's inverse mass (1/kg), 0 without a solver body.
+    pub m_a: f32,
+    /// A's world inverse inertia, 0 without a solver body.
+    pub i_a: Mat3,
+    /// B's inverse mass.
+    pub m_b: f32,
+    /// B's world inverse inertia.
+    pub i_b: Mat3,
+}
+
+/// The [`Sides`] of contact `c`, or `None` when it does not push: a sensor, no point, a
+/// missing body, or no moving dynamic body.
+pub(crate) fn sides<'s, 'a, const N: usize>(
+    c: &Contact,
+    bodies: &'s Pool<Body<'a>, N>,
+    solver_bodies: &'s [SolverBody],
+    solver_index: &[u32; N],
+) -> Option<Sides<'s, 'a>> {
+    if c.sensor || c.len == 0 {
+        return None;
+    }
+    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+        return None;
+    };
+    let ia = solver_index.get(c.a as usize).copied().unwrap_or(NONE);
+    let ib = solver_index.get(c.b as usize).copied().unwrap_or(NONE);
+    let sa = solver_bodies.get(ia as usize);
+    let sb = solver_bodies.get(ib as usize);
+    let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
+    if m_a <= 0.0 && m_b <= 0.0 {
+        return None;
+    }
+    Some(Sides {
+        body_a,
+        body_b,
+        sa,
+        sb,
+        ia,
+        ib,
+        m_a,
+        i_a,
+        m_b,
+        i_b,
+    })
+}
+
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
 /// sensor, no point, or no moving dynamic body. The reference the wide prepare
 /// (`wide/prepare.rs`, which the solver runs) is tested against, lane for lane.
@@ -369,21 +429,12 @@ pub(crate) fn prepare<const N: usize>(
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
-    if c.sensor || c.len == 0 {
-        return false;
-    }
-    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+    let Some(side) = sides(c, bodies, solver_bodies, solver_index) else {
         return false;
     };
-    let ia = solver_index.get(c.a as usize).copied().unwrap_or(NONE);
-    let ib = solver_index.get(c.b as usize).copied().unwrap_or(NONE);
-    let sa = solver_bodies.get(ia as usize);
-    let sb = solver_bodies.get(ib as usize);
-    let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
-    let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
-    if m_a <= 0.0 && m_b <= 0.0 {
-        return false;
-    }
+    let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
+    let (ia, ib) = (side.ia, side.ib);
+    let (m_a, i_a, m_b, i_b) = (side.m_a, side.i_a, side.m_b, side.i_b);
     let n = c.normal;
     let t1 = n.any_perpendicular();
     let t2 = n.cross(t1);

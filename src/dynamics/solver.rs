@@ -9,10 +9,11 @@
 //!             inertia, the per-sub-step velocity increment of gravity and forces);
 //!             static and sleeping bodies have no entry: they read as zero velocity and
 //!             infinite mass
-//! prepare     one ContactConstraint per manifold: lever arms, Jacobians and effective
-//!             masses, the separation s0, the closing speed before the solve;
-//!             dynamic–dynamic contacts first, contacts with a static or kinematic body
-//!             last (Gauss-Seidel gives the last word to the last row)
+//! prepare     the rows of every manifold, four manifolds at a time into their group's
+//!             lanes (`wide/prepare.rs`): lever arms, Jacobians and effective masses,
+//!             the separation s0, the closing speed before the solve; dynamic–dynamic
+//!             contacts first, contacts with a static or kinematic body last
+//!             (Gauss-Seidel gives the last word to the last row)
 //! bounce      the collision pass: restitution from the speeds before this step's gravity
 //! for each of `substeps` sub-steps of h = dt / substeps:
 //!     integrate velocities     v += h (g + F/m), ω += h I⁻¹ τ, damping, speed limits

@@ -13,7 +13,7 @@
 
 use super::super::body::{Body, BodyKind};
 use super::super::contact::Contact;
-use super::super::contact_solver::{clip_to_disc, inverse_or_zero, Softness};
+use super::super::contact_solver::{clip_to_disc, inverse_or_zero, sides, Softness};
 use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
 use super::*;
@@ -174,21 +174,12 @@ fn gather_lane<const N: usize>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
 ) {
-    if c.sensor || c.len == 0 {
-        return;
-    }
-    let (Some(body_a), Some(body_b)) = (bodies.at(c.a as usize), bodies.at(c.b as usize)) else {
+    let Some(side) = sides(c, bodies, solver_bodies, solver_index) else {
         return;
     };
-    let ia = solver_index.get(c.a as usize).copied().unwrap_or(NONE);
-    let ib = solver_index.get(c.b as usize).copied().unwrap_or(NONE);
-    let sa = solver_bodies.get(ia as usize);
-    let sb = solver_bodies.get(ib as usize);
-    let (m_a, i_a) = sa.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
-    let (m_b, i_b) = sb.map_or((0.0, Mat3::ZERO), |s| (s.inv_mass, s.inv_inertia));
-    if m_a <= 0.0 && m_b <= 0.0 {
-        return;
-    }
+    let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
+    let (ia, ib) = (side.ia, side.ib);
+    let (m_a, i_a, m_b, i_b) = (side.m_a, side.i_a, side.m_b, side.i_b);
     if let Some(on) = x.on.get_mut(l) {
         *on = true;
     }
