@@ -660,6 +660,16 @@ mod tests {
     /// the middle of a pile's motion (warm impulses, sticking and sliding patches).
     #[test]
     fn the_wide_prepare_gives_each_lane_the_scalar_prepare() {
+        // Worlds, their clones and the stores are large for a debug build's test thread.
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(compare_wide_and_scalar_prepare)
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
+    fn compare_wide_and_scalar_prepare() {
         let mut world = prepare_world();
         let mut lanes = 0usize;
         for step in 0..90 {
