@@ -5,10 +5,11 @@
 //! exactly), and scenes whose events follow from simple kinematics.
 
 use carom::collide::{contact, movement_bounds, Motion};
-use carom::config::REUSE_SLACK;
+use carom::config::{reuse_slack, HULL_REUSE_SLACK, REUSE_SLACK};
 use carom::rng::SplitMix64;
 use carom::{
-    BodyDesc, BodyHandle, BodyKind, Event, Iso, Shape, StepTrace, Vec3, World, WorldConfig,
+    BodyDesc, BodyHandle, BodyKind, ConvexHull, Event, Iso, Shape, StepTrace, Vec3, World,
+    WorldConfig,
 };
 
 fn zero_gravity() -> WorldConfig {
@@ -43,7 +44,7 @@ fn random_shape(rng: &mut SplitMix64) -> Shape<'static> {
 /// body's its exact box. A contact is a pair whose shapes are within `margin`.
 fn brute_force<const B: usize, const C: usize, const E: usize>(
     world: &World<'_, B, C, E>,
-    margin: f32,
+    margin: impl Fn(&Shape<'_>, &Shape<'_>) -> f32,
 ) -> (usize, usize, usize, Vec<(BodyHandle, BodyHandle)>) {
     let cfg = *world.config();
     let handles: Vec<BodyHandle> = world.handles().collect();
@@ -76,6 +77,7 @@ fn brute_force<const B: usize, const C: usize, const E: usize>(
                 continue;
             }
             pairs += 1;
+            let margin = margin(&a.shape(), &b.shape());
             let m = contact(&a.shape(), &a.pose(), &b.shape(), &b.pose(), margin).unwrap();
             if let Some(m) = m.filter(|m| !m.points().is_empty()) {
                 contacts += 1;
@@ -105,16 +107,53 @@ fn count(events: &[Event], pred: impl Fn(&Event) -> bool) -> usize {
 
 /// Random crowded scenes, no gravity, at rest: after one step, pair, contact and point
 /// counts and the begin events equal the brute-force answer exactly (bodies at rest: the
-/// narrow phase's margin is the speculative margin plus the reuse slack). After a second
-/// step (the solver has pushed overlapping bodies apart, so they move and manifolds may
-/// be reused) every pair within the speculative margin still has its manifold.
+/// narrow phase's margin is the speculative margin plus the pair's reuse slack). After a
+/// second step (the solver has pushed overlapping bodies apart, so they move and
+/// manifolds may be reused) every pair within the speculative margin still has its
+/// manifold.
 #[test]
 fn pairs_and_contacts_match_brute_force() {
+    match_brute_force(&[]);
+}
+
+/// The same with convex hulls among the shapes: a pair with a hull keeps points up to the
+/// longer [`HULL_REUSE_SLACK`] beyond the speculative margin, the others one slop
+/// ([`REUSE_SLACK`]); a single margin for all pairs gives other counts.
+#[test]
+fn hull_pairs_keep_points_within_the_longer_reuse_slack() {
+    let hulls: Vec<ConvexHull> = (0..4u64)
+        .map(|k| {
+            let mut rng = SplitMix64::new(100 + k);
+            let points: Vec<Vec3> = (0..12)
+                .map(|_| {
+                    Vec3::new(
+                        rng.range(-0.5, 0.5),
+                        rng.range(-0.5, 0.5),
+                        rng.range(-0.5, 0.5),
+                    )
+                })
+                .collect();
+            ConvexHull::new(&points).unwrap()
+        })
+        .collect();
+    assert!(HULL_REUSE_SLACK > REUSE_SLACK);
+    let shapes: Vec<Shape<'_>> = hulls.iter().map(Shape::Hull).collect();
+    match_brute_force(&shapes);
+}
+
+/// [`pairs_and_contacts_match_brute_force`] on worlds whose every fourth body (when
+/// `extra` is not empty) takes one of the `extra` shapes.
+fn match_brute_force(extra: &[Shape<'_>]) {
+    let (mut hull_pairs_between_slacks, mut points_total) = (0, 0);
     for seed in 1..=6u64 {
         let mut rng = SplitMix64::new(seed);
         let mut world: World<48, 256, 256> = World::with_config(zero_gravity()).unwrap();
-        for _ in 0..40 {
-            let shape = random_shape(&mut rng);
+        for k in 0..40 {
+            let shape = if !extra.is_empty() && k % 4 == 0 {
+                extra[(k / 4) % extra.len()]
+            } else {
+                random_shape(&mut rng)
+            };
             let p = Vec3::new(
                 rng.range(-3.0, 3.0),
                 rng.range(-3.0, 3.0),
@@ -131,7 +170,14 @@ fn pairs_and_contacts_match_brute_force() {
         }
         let cfg = *world.config();
         let (pairs, contacts, points, touching) =
-            brute_force(&world, cfg.speculative_margin + REUSE_SLACK);
+            brute_force(&world, |a, b| cfg.speculative_margin + reuse_slack(a, b));
+        // Hull pairs whose points lie between the short and the long slack: what the
+        // per-pair slack decides (the test would pass with one slack for all otherwise).
+        let (_, short, _, _) = brute_force(&world, |_, _| cfg.speculative_margin + REUSE_SLACK);
+        hull_pairs_between_slacks += contacts
+            .checked_sub(short)
+            .expect("a longer margin cannot find fewer contacts");
+        points_total += points;
         let report = world.step();
         assert!(contacts > 5, "seed {seed}: scene too sparse to test");
         assert_eq!(report.pairs as usize, pairs, "seed {seed}");
@@ -142,7 +188,7 @@ fn pairs_and_contacts_match_brute_force() {
         assert!(!report.overflowed(), "seed {seed}: {report:?}");
         // Every touching pair is new: one begin each, in (lower slot, higher slot) order.
         assert_eq!(begins(world.events()), touching, "seed {seed}");
-        let (_, near, _, _) = brute_force(&world, cfg.speculative_margin);
+        let (_, near, _, _) = brute_force(&world, |_, _| cfg.speculative_margin);
         let report = world.step();
         assert!(
             report.contacts as usize >= near,
@@ -150,6 +196,15 @@ fn pairs_and_contacts_match_brute_force() {
             report.contacts
         );
         assert!(!report.overflowed(), "seed {seed}: {report:?}");
+    }
+    assert!(points_total > 0);
+    if extra.is_empty() {
+        assert_eq!(hull_pairs_between_slacks, 0);
+    } else {
+        assert!(
+            hull_pairs_between_slacks > 0,
+            "no hull pair lies between the two slacks: the test does not tell them apart"
+        );
     }
 }
 

@@ -26,8 +26,10 @@
 //! a step early and the solver stops it at the surface: speculative continuous
 //! collision (Catto, GDC 2013). It is part of continuous collision: when no dynamic body
 //! of the pair has `ccd` on, `w` is 0 and fast bodies may tunnel. A full narrow phase stores the relative pose `b_in_a` it ran at and the
-//! margin it used, `margin + REUSE_SLACK`. While the relative pose has moved by
-//! `drift = |Δt| + 2 sin(θ/2) R_b ≤ REUSE_SLACK` (θ the angle of the relative turn; no
+//! margin it used, `margin + slack`, with the pair's slack
+//! ([`crate::config::reuse_slack`]: one slop, four for a pair with a convex hull, whose
+//! manifold costs about ten times more to build). While the relative pose has moved by
+//! `drift = |Δt| + 2 sin(θ/2) R_b ≤ slack` (θ the angle of the relative turn; no
 //! point of B moved more than that in A's frame) and `margin + drift ≤ built margin`,
 //! the manifold is reused:
 //! its points are the same two surface points fixed in the two bodies, so their
@@ -43,7 +45,7 @@
 //! At the start of the narrow phase every body forms a box around its shape at its pose
 //! (`Body::bounds`: exact for spheres, capsules, cuboids and triangles, the bounding
 //! sphere's box for the rest). A pair of two bodies (not a mesh or compound part) that
-//! has no point and whose boxes lie more than `margin + REUSE_SLACK` apart along an axis
+//! has no point and whose boxes lie more than `margin + slack` apart along an axis
 //! keeps no point: what a build with that margin would find, and what a reuse of its
 //! empty manifold would give. It then keeps no manifold to reuse (its next test is this
 //! one again, or a build). The test costs two box comparisons where the reuse test costs
@@ -87,7 +89,7 @@
 use heapless::Vec as HVec;
 
 use crate::collide::{contact_cached_unchecked, Manifold, PairCache};
-use crate::config::{WorldConfig, REUSE_SLACK};
+use crate::config::{reuse_slack, WorldConfig};
 use crate::dynamics::body::{Body, BodyKind, Material};
 use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
@@ -593,7 +595,11 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
     let reach = pair_reach(body_a, body_b, cfg);
     if c.len == 0
         && !c.is_part()
-        && apart(body_a, body_b, cfg.speculative_margin + reach + REUSE_SLACK)
+        && apart(
+            body_a,
+            body_b,
+            cfg.speculative_margin + reach + reuse_slack(&body_a.shape, &body_b.shape),
+        )
     {
         // No point, as a build or a reuse would give, for the price of a box test.
         c.touching = false;
@@ -697,7 +703,7 @@ impl Plan<'_> {
             );
             drift = scalar::min(drift, a_drift);
         }
-        drift <= REUSE_SLACK && self.margin + drift <= c.built_margin
+        drift <= reuse_slack(&self.shape_a, &self.shape_b) && self.margin + drift <= c.built_margin
     }
 }
 
@@ -717,7 +723,7 @@ fn build(
     body_b: &Body<'_>,
     cfg: &WorldConfig,
 ) -> bool {
-    let built_margin = plan.margin + REUSE_SLACK;
+    let built_margin = plan.margin + reuse_slack(&plan.shape_a, &plan.shape_b);
     let (a, pose_a, b, pose_b) = (&plan.shape_a, &plan.pose_a, &plan.shape_b, &plan.pose_b);
     let out_of_reach =
         plan.parts.is_some() && mid_phase::beyond_reach(a, pose_a, b, pose_b, built_margin);
