@@ -691,19 +691,25 @@ impl Plan<'_> {
         if c.built_margin < 0.0 {
             return false;
         }
-        let mut drift = relative_drift(&c.built_pose, &self.b_in_a, self.shape_b.bounding_radius());
-        if self.parts.is_some() {
-            // A change in the distance of two points is bounded by either one's move
-            // relative to the other body: A's points in B's frame count too (a mesh
-            // triangle's radius is about the mesh's origin, far away).
-            let a_drift = relative_drift(
-                &c.built_pose.inverse(),
-                &self.b_in_a.inverse(),
-                self.shape_a.bounding_radius(),
-            );
-            drift = scalar::min(drift, a_drift);
+        let slack = reuse_slack(&self.shape_a, &self.shape_b);
+        let fits = |drift: f32| drift <= slack && self.margin + drift <= c.built_margin;
+        let drift = relative_drift(&c.built_pose, &self.b_in_a, self.shape_b.bounding_radius());
+        if fits(drift) {
+            return true;
         }
-        drift <= reuse_slack(&self.shape_a, &self.shape_b) && self.margin + drift <= c.built_margin
+        if self.parts.is_none() {
+            return false;
+        }
+        // A change in the distance of two points is bounded by either one's move relative
+        // to the other body: A's points in B's frame count too (a mesh triangle's radius
+        // is about the mesh's origin, far away). Either bound suffices, so this one is
+        // formed only when B's did not.
+        let a_drift = relative_drift(
+            &c.built_pose.inverse(),
+            &self.b_in_a.inverse(),
+            self.shape_a.bounding_radius(),
+        );
+        fits(scalar::min(drift, a_drift))
     }
 }
 
