@@ -506,6 +506,19 @@ fn edge_is_active(soup: &Soup<'_, '_>, tri: u32, edge: usize, f: Vec3) -> bool {
         1 => (p1, p2),
         _ => (p2, p0),
     };
+    if let Soup::Field(field) = soup {
+        // The grid names the neighbour: no search.
+        let Some(o) = field
+            .edge_neighbour(tri, edge)
+            .and_then(|o| field.triangle(o))
+        else {
+            return true;
+        };
+        return match o.vertices.iter().find(|&&x| x != u && x != v) {
+            Some(&w) => turns_down(f, w - u),
+            None => true,
+        };
+    }
     let mut active = true;
     let mut found = false;
     soup.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
@@ -524,10 +537,16 @@ fn edge_is_active(soup: &Soup<'_, '_>, tri: u32, edge: usize, f: Vec3) -> bool {
             return;
         };
         found = true;
-        let r = w - u;
-        active = f.dot(r) < -ACTIVE_EDGE_SIN * r.length();
+        active = turns_down(f, w - u);
     });
     active
+}
+
+/// True when `r` (from the shared edge to the neighbour's third vertex) lies below the
+/// face's plane (normal `f`) by more than [`ACTIVE_EDGE_SIN`] of its length: a ridge.
+#[inline]
+fn turns_down(f: Vec3, r: Vec3) -> bool {
+    f.dot(r) < -ACTIVE_EDGE_SIN * r.length()
 }
 
 /// The triangles of a mesh or a height field, for the internal-edge rule.

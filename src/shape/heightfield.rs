@@ -232,6 +232,39 @@ impl<'a> HeightField<'a> {
         self.cell_triangle(cell.checked_rem(nx)?, cell.checked_div(nx)?, t % 2)
     }
 
+    /// The other triangle on edge `edge` (0: v0–v1, 1: v1–v2, 2: v2–v0, in the order
+    /// [`HeightField::triangle`] gives the vertices) of triangle `t`: the cell's other
+    /// triangle across the diagonal, or the next cell's triangle across a cell side; `None`
+    /// on the grid's border or for an index out of range. It is the one other triangle
+    /// holding both of the edge's end points (the same bits: both cells compute a shared
+    /// vertex from the same sample and column and row coordinates).
+    ///
+    /// Cell `(i, j)` holds triangle 0 `[p00, p11, p10]` and triangle 1 `[p00, p01, p11]`.
+    pub(crate) fn edge_neighbour(&self, t: u32, edge: usize) -> Option<u32> {
+        if t >= self.triangle_count() {
+            return None;
+        }
+        let (nx, nz) = (self.cells_x(), self.cells_z());
+        let cell = t / 2;
+        let (i, j) = (cell.checked_rem(nx)?, cell.checked_div(nx)?);
+        // Triangle k of cell (i, j): fewer than 2 · 2²⁰ triangles, no overflow.
+        let index = |i: u32, j: u32, k: u32| 2 * (j * nx + i) + k;
+        match (t % 2, edge) {
+            // The diagonal p00–p11.
+            (0, 0) => Some(t + 1),
+            // The side x = x(i + 1), p11–p10: triangle 1 of the cell on the right.
+            (0, 1) => (i + 1 < nx).then(|| index(i + 1, j, 1)),
+            // The side z = z(j), p10–p00: triangle 1 of the cell before.
+            (0, _) => (j > 0).then(|| index(i, j - 1, 1)),
+            // The side x = x(i), p00–p01: triangle 0 of the cell on the left.
+            (_, 0) => (i > 0).then(|| index(i - 1, j, 0)),
+            // The side z = z(j + 1), p01–p11: triangle 0 of the cell after.
+            (_, 1) => (j + 1 < nz).then(|| index(i, j + 1, 0)),
+            // The diagonal p11–p00.
+            _ => Some(t - 1),
+        }
+    }
+
     /// Call `f` with the index of every triangle whose bounding box (of its vertices)
     /// overlaps or touches `aabb` (m, [`Aabb::overlaps`]), each once, in increasing index
     /// order. A box with a NaN overlaps nothing.
@@ -589,6 +622,34 @@ mod tests {
         (0..field.triangle_count())
             .filter(|&t| tri_box(&field.triangle(t).unwrap()).overlaps(q))
             .collect()
+    }
+
+    /// Every edge's neighbour is the one other triangle holding both of its end points
+    /// (the same bits), found by a search over every triangle; `None` exactly where no
+    /// other triangle holds them (the border).
+    #[test]
+    fn edge_neighbours_match_a_search_over_every_triangle() {
+        let mut border = 0;
+        for (heights, columns, rows, cell) in fields() {
+            let field = HeightField::new(&heights, columns, rows, cell).unwrap();
+            for t in 0..field.triangle_count() {
+                let [p0, p1, p2] = field.triangle(t).unwrap().vertices;
+                for (edge, (u, v)) in [(p0, p1), (p1, p2), (p2, p0)].into_iter().enumerate() {
+                    let holders: Vec<u32> = (0..field.triangle_count())
+                        .filter(|&o| {
+                            let w = field.triangle(o).unwrap().vertices;
+                            o != t && w.contains(&u) && w.contains(&v)
+                        })
+                        .collect();
+                    assert!(holders.len() <= 1, "{t}/{edge}: {holders:?}");
+                    assert_eq!(field.edge_neighbour(t, edge), holders.first().copied());
+                    border += usize::from(holders.is_empty());
+                }
+            }
+            assert_eq!(field.edge_neighbour(field.triangle_count(), 0), None);
+        }
+        // The border edges: two per border cell side.
+        assert!(border > 0);
     }
 
     fn brute_ray(field: &HeightField, ray: &Ray, max_t: f32) -> Option<(u32, RayHit)> {
