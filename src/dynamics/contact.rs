@@ -222,10 +222,13 @@ pub(crate) fn contains_pair(contacts: &[Contact], pair: (u32, u32)) -> bool {
     contacts.binary_search_by(|c| c.key().cmp(&key)).is_ok()
 }
 
+/// Runs of at most this many contacts are scanned, longer ones bisected ([`PairIndex`]).
+const SCAN_MAX: usize = 16;
+
 /// Lookups of pairs in `contacts` (sorted by key), for a search that makes many: indexed
 /// by body A, the contacts whose lower slot is `s` are `contacts[starts[s]..starts[s +
-/// 1]]`, so a lookup scans the few contacts of one body instead of binary-searching them
-/// all. Building the index reads every contact's `a` once, which pays when there are
+/// 1]]`, so a lookup scans (or, past [`SCAN_MAX`], bisects) the contacts of one body
+/// instead of bisecting them all. Building the index reads every contact's `a` once, which pays when there are
 /// many lookups; without it ([`PairIndex::new`] with `build` false) a lookup is the
 /// binary search of [`contains_pair`]. Either way the answers are the same.
 pub(crate) struct PairIndex<'c, const N: usize> {
@@ -267,9 +270,14 @@ impl<'c, const N: usize> PairIndex<'c, N> {
             .starts
             .get(a as usize + 1)
             .map_or(self.contacts.len(), |&e| e as usize);
-        self.contacts
-            .get(start..end)
-            .is_some_and(|run| run.iter().any(|c| c.a == a && c.b == b))
+        let run = self.contacts.get(start..end).unwrap_or(&[]);
+        if run.len() <= SCAN_MAX {
+            return run.iter().any(|c| c.a == a && c.b == b);
+        }
+        // The run is sorted by `b` (the contacts by key), and a body with parts (a height
+        // field under a pile) has thousands in its run: bisect it.
+        let at = run.partition_point(|c| c.b < b);
+        run.get(at).is_some_and(|c| c.a == a && c.b == b)
     }
 }
 
