@@ -125,13 +125,7 @@ fn hull_pairs_keep_points_within_the_longer_reuse_slack() {
         .map(|k| {
             let mut rng = SplitMix64::new(100 + k);
             let points: Vec<Vec3> = (0..12)
-                .map(|_| {
-                    Vec3::new(
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                        rng.range(-0.5, 0.5),
-                    )
-                })
+                .map(|_| rng.unit_vector() * rng.range(0.2, 0.6))
                 .collect();
             ConvexHull::new(&points).unwrap()
         })
