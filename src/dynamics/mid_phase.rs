@@ -208,7 +208,9 @@ pub(crate) fn candidates(a: &Body<'_>, b: &Body<'_>, out: &mut HVec<u32, MAX_PAI
     // A height field lists its cells' triangles in index order, and a convex partner
     // keeps the keys in that order: sort only what came out of order (a mesh's tree, a
     // compound's parts, two part lists).
-    if !out.is_sorted() {
+    // (Pairs by zipped iterators: `is_sorted` links a slice-index panic on thumbv7em.)
+    let in_order = out.iter().zip(out.iter().skip(1)).all(|(x, y)| x <= y);
+    if !in_order {
         crate::sort::sort_unstable(out);
     }
     fits
