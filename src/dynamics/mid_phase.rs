@@ -513,40 +513,10 @@ fn edge_is_active(soup: &Soup<'_, '_>, tri: u32, edge: usize, f: Vec3) -> bool {
         1 => (p1, p2),
         _ => (p2, p0),
     };
-    if let Soup::Field(field) = soup {
-        // The grid names the neighbour: no search.
-        let Some(o) = field
-            .edge_neighbour(tri, edge)
-            .and_then(|o| field.triangle(o))
-        else {
-            return true;
-        };
-        return match o.vertices.iter().find(|&&x| x != u && x != v) {
-            Some(&w) => turns_down(f, w - u),
-            None => true,
-        };
-    }
-    let mut active = true;
-    let mut found = false;
-    soup.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
-        if other == tri || found {
-            return;
-        }
-        let Some(o) = soup.triangle(other) else {
-            return;
-        };
-        if !(o.vertices.contains(&u) && o.vertices.contains(&v)) {
-            return;
-        }
-        // The neighbour's third vertex: below the face's plane by more than the
-        // threshold (relative to its distance) means a ridge.
-        let Some(&w) = o.vertices.iter().find(|&&x| x != u && x != v) else {
-            return;
-        };
-        found = true;
-        active = turns_down(f, w - u);
-    });
-    active
+    // The neighbour's third vertex: below the face's plane by more than the threshold
+    // (relative to its distance) means a ridge.
+    soup.neighbour_apex(tri, edge, u, v)
+        .is_none_or(|w| turns_down(f, w - u))
 }
 
 /// True when `r` (from the shared edge to the neighbour's third vertex) lies below the
@@ -582,11 +552,32 @@ impl Soup<'_, '_> {
         }
     }
 
-    fn query_aabb(&self, aabb: &Aabb, f: impl FnMut(u32)) {
-        match self {
-            Soup::Mesh(m) => m.query_aabb(aabb, f),
-            Soup::Field(h) => h.query_aabb(aabb, f),
-        }
+    /// The third vertex of the other triangle holding both end points `u` and `v` (the
+    /// same bits) of edge `edge` of triangle `tri`, or `None` when no other triangle
+    /// does. A height field's grid names that triangle; a mesh searches its hierarchy
+    /// for the first one, in query order, with a third vertex.
+    fn neighbour_apex(&self, tri: u32, edge: usize, u: Vec3, v: Vec3) -> Option<Vec3> {
+        let apex = |o: Triangle| o.vertices.into_iter().find(|&x| x != u && x != v);
+        let mesh = match self {
+            Soup::Field(field) => {
+                return field
+                    .edge_neighbour(tri, edge)
+                    .and_then(|o| field.triangle(o))
+                    .and_then(apex)
+            }
+            Soup::Mesh(mesh) => mesh,
+        };
+        let mut found = None;
+        mesh.query_aabb(&Aabb::new(u.min(v), u.max(v)), |other| {
+            if other == tri || found.is_some() {
+                return;
+            }
+            found = mesh
+                .triangle(other)
+                .filter(|o| o.vertices.contains(&u) && o.vertices.contains(&v))
+                .and_then(apex);
+        });
+        found
     }
 }
 
