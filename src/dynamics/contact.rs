@@ -228,8 +228,8 @@ const SCAN_MAX: usize = 16;
 /// Lookups of pairs in `contacts` (sorted by key), for a search that makes many: indexed
 /// by body A, the contacts whose lower slot is `s` are `contacts[starts[s]..starts[s +
 /// 1]]`, so a lookup scans (or, past [`SCAN_MAX`], bisects) the contacts of one body
-/// instead of bisecting them all. Building the index reads every contact's `a` once, which pays when there are
-/// many lookups; without it ([`PairIndex::new`] with `build` false) a lookup is the
+/// instead of bisecting them all. Building the index reads every contact's `a` once,
+/// which pays when there are many lookups; without it ([`PairIndex::new`] with `build` false) a lookup is the
 /// binary search of [`contains_pair`]. Either way the answers are the same.
 pub(crate) struct PairIndex<'c, const N: usize> {
     contacts: &'c [Contact],
