@@ -44,9 +44,22 @@ impl Mat3 {
         )
     }
 
-    /// The rotation matrix of a unit quaternion.
+    /// The rotation matrix of a unit quaternion: its columns are `q.rotate(X)`,
+    /// `q.rotate(Y)` and `q.rotate(Z)`, written out with the products by the basis
+    /// vectors' zeros and ones left out (`v + w t + u × t` with `t = 2 u × v`, each term
+    /// in [`Quat::rotate`]'s order). A term left out is a product by zero, so a column
+    /// can differ from `rotate`'s only in the sign of a zero component.
+    #[inline]
     pub fn from_quat(q: Quat) -> Mat3 {
-        Mat3::from_cols(q.rotate(Vec3::X), q.rotate(Vec3::Y), q.rotate(Vec3::Z))
+        let (x, y, z, w) = (q.x, q.y, q.z, q.w);
+        let (x2, y2, z2) = (x * 2.0, y * 2.0, z * 2.0);
+        // Column X: t = (0, 2z, −2y).
+        let cx = Vec3::new(1.0 + (y * -y2 - z * z2), z2 * w - x * -y2, -y2 * w + x * z2);
+        // Column Y: t = (−2z, 0, 2x).
+        let cy = Vec3::new(-z2 * w + y * x2, 1.0 + (z * -z2 - x * x2), x2 * w - y * -z2);
+        // Column Z: t = (2y, −2x, 0).
+        let cz = Vec3::new(y2 * w - z * -x2, -x2 * w + z * y2, 1.0 + (x * -x2 - y * y2));
+        Mat3::from_cols(cx, cy, cz)
     }
 
     /// Row `i` (0, 1, anything else → 2).
@@ -186,6 +199,34 @@ mod tests {
             assert!((a - b).length() < 1e-6);
         }
         assert!(Mat3::ZERO.inverse().is_none());
+    }
+
+    #[test]
+    fn from_quat_columns_are_the_rotated_axes_to_the_bit() {
+        // The written-out matrix against `Quat::rotate` of the axes: equal values (`==`
+        // lets the sign of a zero differ, the one difference the docs allow), for random
+        // rotations and for the axis-aligned ones whose products by zero matter most.
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut rotations = [Quat::IDENTITY; 1006];
+        for q in rotations.iter_mut().skip(6) {
+            *q = rng.rotation();
+        }
+        let quarter = core::f32::consts::FRAC_PI_2;
+        for (q, axis) in rotations.iter_mut().zip([Vec3::X, Vec3::Y, Vec3::Z]) {
+            *q = Quat::from_axis_angle(axis, quarter);
+        }
+        rotations[3] = Quat::from_xyzw(0.0, 0.0, 0.0, -1.0);
+        rotations[4] = Quat::from_xyzw(-0.0, 1.0, -0.0, 0.0);
+        for q in rotations {
+            let m = Mat3::from_quat(q);
+            for (col, axis) in [(m.x, Vec3::X), (m.y, Vec3::Y), (m.z, Vec3::Z)] {
+                let r = q.rotate(axis);
+                assert!(
+                    col.x == r.x && col.y == r.y && col.z == r.z,
+                    "{q:?} {axis:?}"
+                );
+            }
+        }
     }
 
     #[test]
