@@ -14,6 +14,7 @@
 
 use super::{Face, FeatureId, MassProperties, Ray, RayHit, MAX_FACE_VERTICES};
 use crate::error::{Error, HullError, Input};
+use crate::math::lanes::{F4, V4};
 use crate::math::vec64::Vec64;
 use crate::math::{scalar, Aabb, Iso, Mat3, Vec3};
 
@@ -29,7 +30,7 @@ pub const MAX_HULL_EDGES: usize = 3 * MAX_HULL_VERTICES - 6;
 pub const MAX_HULL_INPUT_POINTS: usize = 1024;
 
 /// A convex polytope. Build it with [`ConvexHull::new`]; it is plain data, `Copy`, and about
-/// 4.2 KiB.
+/// 4.9 KiB (0.75 KiB of it a second copy of the vertices, laid out for the support scans).
 ///
 /// # Examples
 ///
@@ -101,6 +102,10 @@ pub struct ConvexHull {
     /// [`Shape::bounding_radius`](crate::Shape::bounding_radius), asked for on every part
     /// contact and every swept pair.
     pub(crate) outer_radius: f32,
+    /// The vertices four to a group as lanes (`vertex_lanes[g]` holds vertices
+    /// `4g .. 4g + 4`), written once at build: the support scans read them four products
+    /// at a time. A last partial group's padding lanes repeat vertex 0.
+    pub(crate) vertex_lanes: [V4; MAX_HULL_VERTICES / 4],
 }
 
 /// Largest `|u · n|` (u an edge's unit vector, n the normal of a face beside it) for
@@ -128,6 +133,11 @@ pub(crate) struct HullEdge {
 /// A hull with nothing in it, filled by the builder.
 const EMPTY_HULL: ConvexHull = ConvexHull {
     vertices: [Vec3::ZERO; MAX_HULL_VERTICES],
+    vertex_lanes: [V4 {
+        x: F4::ZERO,
+        y: F4::ZERO,
+        z: F4::ZERO,
+    }; MAX_HULL_VERTICES / 4],
     vertex_count: 0,
     normals: [Vec3::ZERO; MAX_HULL_FACES],
     offsets: [0.0; MAX_HULL_FACES],
@@ -374,74 +384,75 @@ impl ConvexHull {
     /// order, with four independent compare chains instead of one long one (GJK waits on
     /// every support point).
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
-        // A select, not a branch: which vertex wins is data.
-        #[inline(always)]
-        fn take(best: &mut (f32, usize), d: f32, i: usize) {
-            let wins = d > best.0;
-            best.0 = if wins { d } else { best.0 };
-            best.1 = if wins { i } else { best.1 };
-        }
-        let vs = self.vertices();
-        let none = (f32::NEG_INFINITY, usize::MAX);
-        let (mut l0, mut l1, mut l2, mut l3) = (none, none, none, none);
-        let mut chunks = vs.chunks_exact(4);
-        let mut base = 0usize;
-        for c in chunks.by_ref() {
-            if let [v0, v1, v2, v3] = c {
-                take(&mut l0, v0.dot(dir), base);
-                take(&mut l1, v1.dot(dir), base + 1);
-                take(&mut l2, v2.dot(dir), base + 2);
-                take(&mut l3, v3.dot(dir), base + 3);
-            }
+        // Lane `k` runs over the vertices `k, k + 4, ...`, four products at a time
+        // (`x dₓ + y d_y + z d_z`, as `Vec3::dot`), and takes a product only when it is
+        // larger (so the lowest index on ties, and never a NaN). A last partial group's
+        // padding lanes repeat vertex 0, whose lane 0 always holds at least its product:
+        // a padding lane never wins the merge.
+        let d = V4 {
+            x: F4::splat(dir.x),
+            y: F4::splat(dir.y),
+            z: F4::splat(dir.z),
+        };
+        let mut best = F4::splat(f32::NEG_INFINITY);
+        let mut index = [u32::MAX; 4];
+        let mut base = 0u32;
+        for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
+            let p = group.dot(&d);
+            // A bit mask per lane, so the index select is a blend, not a branch.
+            let wins: [u32; 4] =
+                core::array::from_fn(|k| u32::from(p.lane(k) > best.lane(k)).wrapping_neg());
+            index = core::array::from_fn(|k| {
+                let (w, old) = (wins[k & 3], index[k & 3]);
+                ((base + k as u32) & w) | (old & !w)
+            });
+            best = p.gt_select(best, p, best);
             base += 4;
         }
-        for (k, v) in chunks.remainder().iter().enumerate() {
-            let lane = match k {
-                0 => &mut l0,
-                1 => &mut l1,
-                _ => &mut l2,
-            };
-            take(lane, v.dot(dir), base + k);
-        }
         // Merge: the largest product, the lowest index among equal ones.
-        let mut best = none;
-        for lane in [l0, l1, l2, l3] {
-            let better = lane.1 != usize::MAX
-                && (best.1 == usize::MAX
-                    || lane.0 > best.0
-                    || (lane.0 == best.0 && lane.1 < best.1));
+        let mut pick = (f32::NEG_INFINITY, u32::MAX);
+        for (k, &i) in index.iter().enumerate() {
+            let p = best.lane(k);
+            let better =
+                i != u32::MAX && (pick.1 == u32::MAX || p > pick.0 || (p == pick.0 && i < pick.1));
             if better {
-                best = lane;
+                pick = (p, i);
             }
         }
-        let i = if best.1 == usize::MAX { 0 } else { best.1 };
-        (self.core_vertex(i as u32), i as u32)
+        let i = if pick.1 == u32::MAX { 0 } else { pick.1 };
+        (self.core_vertex(i), i)
+    }
+
+    /// The groups of [`ConvexHull::vertex_lanes`] in use: the vertices' count over four,
+    /// rounded up.
+    #[inline]
+    fn vertex_groups(&self) -> usize {
+        usize::from(self.vertex_count).div_ceil(4)
     }
 
     /// The smallest `v · dir` over the vertices (`+∞` for none; NaN products are
     /// skipped): the same number as `dir · v` for the vertex [`ConvexHull::core_support`]
-    /// picks along `−dir`, bit for bit (the products only change sign), without finding
-    /// the vertex. Four running minima, merged at the end.
+    /// picks along `−dir` (the products only change sign), without finding the vertex.
+    /// Four running minima over [`ConvexHull::vertex_lanes`] (lane `k` over the vertices
+    /// `k, k + 4, ...`; padding lanes repeat vertex 0), then merged: lanes 0 and 1, 2 and
+    /// 3, then the two.
     pub(crate) fn min_dot(&self, dir: Vec3) -> f32 {
         #[inline(always)]
         fn take(best: &mut f32, d: f32) {
             *best = if d < *best { d } else { *best };
         }
-        let vs = self.vertices();
-        let (mut l0, mut l1, mut l2, mut l3) =
-            (f32::INFINITY, f32::INFINITY, f32::INFINITY, f32::INFINITY);
-        let mut chunks = vs.chunks_exact(4);
-        for c in chunks.by_ref() {
-            if let [v0, v1, v2, v3] = c {
-                take(&mut l0, v0.dot(dir));
-                take(&mut l1, v1.dot(dir));
-                take(&mut l2, v2.dot(dir));
-                take(&mut l3, v3.dot(dir));
-            }
+        let d = V4 {
+            x: F4::splat(dir.x),
+            y: F4::splat(dir.y),
+            z: F4::splat(dir.z),
+        };
+        let mut low = F4::splat(f32::INFINITY);
+        for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
+            let p = group.dot(&d);
+            // `p < low` as `low > p`: the same select, NaN products never taken.
+            low = low.gt_select(p, p, low);
         }
-        for v in chunks.remainder() {
-            take(&mut l0, v.dot(dir));
-        }
+        let [mut l0, l1, mut l2, l3] = low.0;
         take(&mut l0, l1);
         take(&mut l2, l3);
         take(&mut l0, l2);
@@ -1407,6 +1418,13 @@ impl<'p> Builder<'p> {
             }
         }
         hull.vertex_count = vc as u8;
+        // Four to a group, the last group's padding lanes repeating vertex 0.
+        let first = hull.vertices.first().copied().unwrap_or(Vec3::ZERO);
+        for (i, v) in hull.vertices.iter().take(vc.div_ceil(4) * 4).enumerate() {
+            if let Some(group) = hull.vertex_lanes.get_mut(i / 4) {
+                group.set(i % 4, if i < vc { *v } else { first });
+            }
+        }
 
         for k in 0..polys.count {
             let mut corners = [0u8; MAX_HULL_VERTICES];
@@ -1917,7 +1935,7 @@ mod tests {
     }
 
     #[test]
-    fn four_lane_support_is_the_sequential_scan() {
+    fn four_lane_support_and_min_dot_are_the_sequential_scans() {
         let mut rng = SplitMix64::new(21);
         // A cube's corners (ties along the axes and diagonals) and random clouds of
         // every remainder mod 4.
@@ -1951,6 +1969,15 @@ mod tests {
                 let (p, i) = h.core_support(dir);
                 assert_eq!(i, sequential_support(h, dir), "{dir:?}");
                 assert_eq!(p, h.core_vertex(i));
+                // The smallest product, against a scan in index order.
+                let low = h.vertices().iter().fold(f32::INFINITY, |m, v| {
+                    if v.dot(dir) < m {
+                        v.dot(dir)
+                    } else {
+                        m
+                    }
+                });
+                assert_eq!(h.min_dot(dir), low, "{dir:?}");
             }
             let nan = Vec3::new(f32::NAN, 0.0, 0.0);
             assert_eq!(h.core_support(nan).1, sequential_support(h, nan));
