@@ -317,12 +317,13 @@ fn one_sphere_point(pose_a: &Iso, r: f32, pose_b: &Iso, on: &SphereOn, out: &mut
 /// Write the one-point manifold `(normal, point)` into `out`; false (and `out` as it
 /// was) when a number of it is not finite.
 fn write_one_point(normal: Vec3, point: ManifoldPoint, out: &mut Manifold) -> bool {
+    // `&`, not `&&`: the usual answer is true, so every check runs anyway.
     let finite = normal.is_finite()
-        && point.point_a.is_finite()
-        && point.point_b.is_finite()
-        && point.local_a.is_finite()
-        && point.local_b.is_finite()
-        && point.separation.is_finite();
+        & point.point_a.is_finite()
+        & point.point_b.is_finite()
+        & point.local_a.is_finite()
+        & point.local_b.is_finite()
+        & point.separation.is_finite();
     if !finite {
         return false;
     }

@@ -87,6 +87,11 @@ impl Quat {
     #[inline]
     pub fn normalize(self) -> Quat {
         let l2 = self.length_squared();
+        if l2 == 1.0 {
+            // Already unit to the last bit: the general path would scale by `1 / √1 = 1`
+            // (exact in IEEE arithmetic), so skip its square root and division.
+            return self;
+        }
         if l2 > 1.0e-20 && l2.is_finite() {
             let inv = 1.0 / scalar::sqrt(l2);
             Quat::from_xyzw(self.x * inv, self.y * inv, self.z * inv, self.w * inv)
@@ -103,7 +108,8 @@ impl Quat {
 
     /// True when every component is finite.
     pub fn is_finite(self) -> bool {
-        self.x.is_finite() && self.y.is_finite() && self.z.is_finite() && self.w.is_finite()
+        // `&`, not `&&`: four compares and no branch between them.
+        self.x.is_finite() & self.y.is_finite() & self.z.is_finite() & self.w.is_finite()
     }
 
     /// Conjugate, the inverse of a unit quaternion.
@@ -177,6 +183,34 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3) -> bool {
         (a - b).length() < 1e-5
+    }
+
+    #[test]
+    fn normalize_keeps_a_unit_quaternion_to_the_bit() {
+        // The `|q|² = 1` shortcut returns `q` as it is; the general path must agree, which
+        // needs `√1 = 1` exactly from the square root in use (libm or micromath's).
+        assert_eq!(scalar::sqrt(1.0).to_bits(), 1.0f32.to_bits());
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut shortcut = 0;
+        for _ in 0..2000 {
+            let q = rng.rotation();
+            let n = q.normalize();
+            if q.length_squared() == 1.0 {
+                shortcut += 1;
+                let inv = 1.0 / scalar::sqrt(1.0);
+                let general = Quat::from_xyzw(q.x * inv, q.y * inv, q.z * inv, q.w * inv);
+                for (a, b) in [
+                    (n.x, general.x),
+                    (n.y, general.y),
+                    (n.z, general.z),
+                    (n.w, general.w),
+                ] {
+                    assert_eq!(a.to_bits(), b.to_bits());
+                }
+            }
+        }
+        // The case is common: random unit rotations hit it often.
+        assert!(shortcut > 100, "{shortcut}");
     }
 
     #[test]
