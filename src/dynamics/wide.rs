@@ -321,6 +321,13 @@ impl Group<'_> {
         f4(&self.s0.s, RESTITUTION).lane(l)
     }
 
+    /// True when some lane has restitution: only those lanes' restitution records are
+    /// read (by the restitution pass), so a group without any skips keeping them.
+    #[inline]
+    fn bouncy(&self) -> bool {
+        f4(&self.s0.s, RESTITUTION).0.iter().any(|&e| e > 0.0)
+    }
+
     /// Write constraint `k` into lane `l` (its points, patch and rows).
     pub fn store_lane(&mut self, l: usize, k: &ContactConstraint) {
         let (s0, s1, s2, s3) = (
@@ -777,30 +784,36 @@ pub(crate) fn solve<const C: usize>(
         };
         let (masks, n) = passes(&group, overflow);
         let rows = group.point_rows();
+        let bouncy = group.bouncy();
         for mask in masks.iter().take(n) {
             // A full group (every coloured group but the last) gets its own copy of the
             // kernel, where the lane selects fold away, with one, two or four point rows
-            // (module docs); the point loop unrolls in each.
+            // (module docs), with or without the restitution records; the point loop
+            // unrolls in each.
             let (g, bodies) = (&mut group, &mut *bodies);
-            match (*mask == ALL_LANES, rows) {
-                (true, 1) => solve_group::<1>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
-                (true, 2) => solve_group::<2>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
-                (true, _) => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, ALL_LANES),
-                _ => solve_group::<4>(g, bodies, cfg, inv_h, use_bias, last, *mask),
+            let a = (cfg, inv_h, use_bias, last);
+            match (*mask == ALL_LANES, rows, bouncy) {
+                (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
+                (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
+                (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
+                (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
+                (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
+                (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
+                _ => solve_group::<4, true>(g, bodies, a, *mask),
             }
         }
     }
 }
 
-#[allow(clippy::too_many_arguments)]
+/// One pass over one group (`solve`'s arguments in `(cfg, inv_h, use_bias, last)`):
+/// `ROWS` point rows, and with `BOUNCY` the records the restitution pass reads (the
+/// closing speed at impact and the impulse so far); a group without restitution in any
+/// lane skips them, as that pass never reads its lanes.
 #[inline(always)]
-fn solve_group<const ROWS: usize>(
+fn solve_group<const ROWS: usize, const BOUNCY: bool>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-    inv_h: f32,
-    use_bias: bool,
-    last: bool,
+    (cfg, inv_h, use_bias, last): (&WorldConfig, f32, bool, bool),
     mask: [bool; 4],
 ) {
     let ia = group.s0.idx;
@@ -861,17 +874,20 @@ fn solve_group<const ROWS: usize>(
         b.w.add_scaled(&p.in_b, delta);
         total += new;
         levers += new * p.twist_arm;
-        // The speed at impact, for restitution: the closing speed the point had when it
-        // first pushed this step (it includes the gravity of the sub-steps before).
-        // Per lane: if (in the mask) the point had not pushed before (total 0), pushes
-        // now (delta > 0) and closes faster than recorded (vn < speed0), record vn.
-        let s0 = p.normal_speed0;
-        let faster = s0.gt_select(vn, vn, s0);
-        let pushes = delta.gt_select(zero, faster, s0);
-        let first = p.total_impulse.eq_select(zero, pushes, s0);
-        p.normal_speed0 = s0.select_where(mask, first);
         p.normal_impulse = new;
-        p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
+        if BOUNCY {
+            // The speed at impact, for restitution: the closing speed the point had when
+            // it first pushed this step (it includes the gravity of the sub-steps
+            // before). Per lane: if (in the mask) the point had not pushed before (total
+            // 0), pushes now (delta > 0) and closes faster than recorded (vn < speed0),
+            // record vn.
+            let s0 = p.normal_speed0;
+            let faster = s0.gt_select(vn, vn, s0);
+            let pushes = delta.gt_select(zero, faster, s0);
+            let first = p.total_impulse.eq_select(zero, pushes, s0);
+            p.normal_speed0 = s0.select_where(mask, first);
+            p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
+        }
     }
     solve_patch(group, &sh, &mut a, &mut b, cfg, total, levers, last, mask);
     solve_rolling(group, &sh, &mut a, &mut b, total, mask);
