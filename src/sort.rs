@@ -2,12 +2,12 @@
 //!
 //! `core`'s `sort_unstable`, `rotate_left`, `copy_within` and `copy_from_slice` carry
 //! panic paths (an order-violation check, length asserts, bounds checks the optimiser
-//! keeps), which the panic-never firmware check refuses; `sort_unstable` (an order-violation check and bounds
-//! checks the optimiser keeps), which the panic-never firmware check refuses. This is a
-//! heapsort: O(n log n) compares in every case, no allocation, no recursion, and every
-//! access checked by `get`. It is not stable, but it is deterministic: the output depends
-//! only on the input order and the comparison, so equal keys land in the same order on
-//! every target. The pipeline sorts unique keys, where stability does not matter.
+//! keeps), which the panic-never firmware check refuses. The sort here is a heapsort
+//! (O(n log n) compares in every case, no allocation, no recursion, every access checked
+//! by `get`), and pairs of `u32` take bucket passes first ([`sort_pairs`]). Neither is
+//! stable, but both are deterministic: the output depends only on the input order and the
+//! comparison, so equal keys land in the same order on every target. The pipeline sorts
+//! unique keys, where stability does not matter.
 
 /// Sort `v` ascending.
 pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
