@@ -188,6 +188,23 @@ pub(crate) struct V4 {
 }
 
 impl V4 {
+    /// Zero in every lane.
+    pub const ZERO: V4 = V4 {
+        x: F4::ZERO,
+        y: F4::ZERO,
+        z: F4::ZERO,
+    };
+
+    /// `v` in every lane.
+    #[inline]
+    pub fn splat(v: Vec3) -> V4 {
+        V4 {
+            x: F4::splat(v.x),
+            y: F4::splat(v.y),
+            z: F4::splat(v.z),
+        }
+    }
+
     /// Lane `l` as a [`Vec3`].
     #[inline]
     pub fn lane(&self, l: usize) -> Vec3 {

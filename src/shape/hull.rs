@@ -133,11 +133,7 @@ pub(crate) struct HullEdge {
 /// A hull with nothing in it, filled by the builder.
 const EMPTY_HULL: ConvexHull = ConvexHull {
     vertices: [Vec3::ZERO; MAX_HULL_VERTICES],
-    vertex_lanes: [V4 {
-        x: F4::ZERO,
-        y: F4::ZERO,
-        z: F4::ZERO,
-    }; MAX_HULL_VERTICES / 4],
+    vertex_lanes: [V4::ZERO; MAX_HULL_VERTICES / 4],
     vertex_count: 0,
     normals: [Vec3::ZERO; MAX_HULL_FACES],
     offsets: [0.0; MAX_HULL_FACES],
@@ -389,11 +385,7 @@ impl ConvexHull {
         // larger (so the lowest index on ties, and never a NaN). A last partial group's
         // padding lanes repeat vertex 0, whose lane 0 always holds at least its product:
         // a padding lane never wins the merge.
-        let d = V4 {
-            x: F4::splat(dir.x),
-            y: F4::splat(dir.y),
-            z: F4::splat(dir.z),
-        };
+        let d = V4::splat(dir);
         let mut best = F4::splat(f32::NEG_INFINITY);
         let mut index = [u32::MAX; 4];
         let mut base = 0u32;
@@ -441,11 +433,7 @@ impl ConvexHull {
         fn take(best: &mut f32, d: f32) {
             *best = if d < *best { d } else { *best };
         }
-        let d = V4 {
-            x: F4::splat(dir.x),
-            y: F4::splat(dir.y),
-            z: F4::splat(dir.z),
-        };
+        let d = V4::splat(dir);
         let mut low = F4::splat(f32::INFINITY);
         for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
             let p = group.dot(&d);
