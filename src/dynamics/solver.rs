@@ -158,16 +158,31 @@ pub(crate) fn solve<const N: usize, const C: usize>(
     let (store, sbodies) = (&mut solver.store, &mut solver.bodies);
     bounce(store, sbodies, contacts, cfg);
     let inv_h = 1.0 / h;
+    // Separations are measured again only after the bodies moved (`wide::Pass`).
+    let mut moved = true;
     for sub in 0..cfg.substeps {
         integrate_velocities(sbodies, cfg);
         wide::warm_start(store, sbodies);
         for _ in 0..cfg.velocity_iterations {
-            wide::solve(store, sbodies, cfg, inv_h, true, false);
+            let pass = wide::Pass {
+                use_bias: true,
+                moved,
+                last: false,
+            };
+            wide::solve(store, sbodies, cfg, inv_h, pass);
+            moved = false;
         }
         integrate_positions(sbodies, h, cfg);
+        moved = true;
         for k in 0..cfg.relax_iterations {
             let last = sub + 1 == cfg.substeps && k + 1 == cfg.relax_iterations;
-            wide::solve(store, sbodies, cfg, inv_h, false, last);
+            let pass = wide::Pass {
+                use_bias: false,
+                moved,
+                last,
+            };
+            wide::solve(store, sbodies, cfg, inv_h, pass);
+            moved = false;
         }
     }
     restitution_and_store(store, sbodies, contacts, cfg);

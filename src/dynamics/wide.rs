@@ -766,16 +766,29 @@ fn stored(x: f32) -> f32 {
     }
 }
 
-/// One iteration over every group: normal rows (soft with `use_bias`, rigid without),
-/// the friction patch, twist and rolling; `last` marks the last relax iteration of the
-/// step, where stick/slip changes.
+/// What one iteration over the groups does ([`solve`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Pass {
+    /// Soft normal rows with push-out (the solve iterations), or rigid rows without
+    /// (relax).
+    pub use_bias: bool,
+    /// The bodies moved since the points' separations were last measured (the step's
+    /// first pass, and the first after each position update): measure them again. Only
+    /// the position update moves bodies, so the passes between two updates measure the
+    /// same separations; all but the first keep them as they are.
+    pub moved: bool,
+    /// The last relax iteration of the step, where stick/slip changes.
+    pub last: bool,
+}
+
+/// One iteration over every group: normal rows, the friction patch, twist and rolling,
+/// as `pass` says.
 pub(crate) fn solve<const C: usize>(
     store: &mut WideStore<C>,
     bodies: &mut [SolverBody],
     cfg: &WorldConfig,
     inv_h: f32,
-    use_bias: bool,
-    last: bool,
+    pass: Pass,
 ) {
     for g in 0..store.groups as usize {
         let overflow = g as u32 >= store.overflow_from;
@@ -791,7 +804,7 @@ pub(crate) fn solve<const C: usize>(
             // (module docs), with or without the restitution records; the point loop
             // unrolls in each.
             let (g, bodies) = (&mut group, &mut *bodies);
-            let a = (cfg, inv_h, use_bias, last);
+            let a = (cfg, inv_h, pass);
             match (*mask == ALL_LANES, rows, bouncy) {
                 (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
                 (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
@@ -805,7 +818,7 @@ pub(crate) fn solve<const C: usize>(
     }
 }
 
-/// One pass over one group (`solve`'s arguments in `(cfg, inv_h, use_bias, last)`):
+/// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`):
 /// `ROWS` point rows, and with `BOUNCY` the records the restitution pass reads (the
 /// closing speed at impact and the impulse so far); a group without restitution in any
 /// lane skips them, as that pass never reads its lanes.
@@ -813,7 +826,7 @@ pub(crate) fn solve<const C: usize>(
 fn solve_group<const ROWS: usize, const BOUNCY: bool>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
-    (cfg, inv_h, use_bias, last): (&WorldConfig, f32, bool, bool),
+    (cfg, inv_h, pass): (&WorldConfig, f32, Pass),
     mask: [bool; 4],
 ) {
     let ia = group.s0.idx;
@@ -822,8 +835,8 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool>(
     let n = sh.n;
     let (body_a, body_b) = (four(bodies, &ia), four(bodies, &ib));
     // The separations first: they depend on the positions only, and the velocity rows
-    // below then keep fewer values live.
-    {
+    // below then keep fewer values live. Unmoved bodies keep the last pass's.
+    if pass.moved {
         let reach_a = NormalReach::gather(&body_a, &n);
         let reach_b = NormalReach::gather(&body_b, &n);
         let moved = reach_b.along - reach_a.along;
@@ -839,7 +852,7 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool>(
     let mut a = Bodies4::of(&body_a);
     let mut b = Bodies4::of(&body_b);
     let (one, zero) = (F4::splat(1.0), F4::ZERO);
-    let (soft_bias, soft_mass, soft_impulse) = if use_bias {
+    let (soft_bias, soft_mass, soft_impulse) = if pass.use_bias {
         (
             sh.mass_scale * sh.bias_rate,
             sh.mass_scale,
@@ -889,7 +902,9 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool>(
             p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         }
     }
-    solve_patch(group, &sh, &mut a, &mut b, cfg, total, levers, last, mask);
+    solve_patch(
+        group, &sh, &mut a, &mut b, cfg, total, levers, pass.last, mask,
+    );
     solve_rolling(group, &sh, &mut a, &mut b, total, mask);
     a.scatter(bodies, &ia, mask);
     b.scatter(bodies, &ib, mask);
