@@ -243,6 +243,14 @@ impl<const C: usize> WideStore<C> {
     pub fn group(&mut self, g: usize) -> Option<Group<'_>> {
         let start = g.checked_mul(4)?;
         let (head, tail) = (&mut self.main, &mut self.extra);
+        // Every group but the last few lies in the main slots: four slots of one slice.
+        let end = start.saturating_add(4);
+        if end <= head.len() {
+            return match head.get_mut(start..end) {
+                Some([s0, s1, s2, s3]) => Some(Group { s0, s1, s2, s3 }),
+                _ => None,
+            };
+        }
         let main_len = head.len();
         let from_main = head.get_mut(start.min(main_len)..).unwrap_or(&mut []);
         let skip = start.saturating_sub(main_len);
@@ -1104,5 +1112,34 @@ mod tests {
         for x in [0.0, -0.0, 1.0e-40, 12.5, -7.25e29, MAX_STATE_FORCE] {
             assert_eq!(stored(x).to_bits(), x.to_bits());
         }
+    }
+
+    /// Group `g` is slots `4g..4g + 4` in order, counted through the main slots and on
+    /// into the extra ones: a group wholly in the main slots (the direct path) and one
+    /// that straddles both (the chained path) alike; past the groups there is none.
+    #[test]
+    fn a_group_is_its_four_consecutive_slots() {
+        let mut store = WideStore::<10>::new();
+        assert!(store.reset(3));
+        for g in 0..3u32 {
+            let mut group = store.group(g as usize).unwrap();
+            for (k, slot) in [&mut group.s0, &mut group.s1, &mut group.s2, &mut group.s3]
+                .into_iter()
+                .enumerate()
+            {
+                slot.idx[0] = 4 * g + k as u32;
+            }
+        }
+        assert_eq!((store.main.len(), store.extra.len()), (10, 2));
+        let mut tags = [u32::MAX; 12];
+        for (t, slot) in tags
+            .iter_mut()
+            .zip(store.main.iter().chain(store.extra.iter()))
+        {
+            *t = slot.idx[0];
+        }
+        assert_eq!(tags, core::array::from_fn(|i| i as u32));
+        assert!(store.group(3).is_none());
+        assert!(store.group(usize::MAX).is_none());
     }
 }
