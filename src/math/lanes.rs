@@ -89,37 +89,34 @@ impl F4 {
     /// Lane-wise `if self > o { a } else { b }`.
     #[inline]
     pub fn gt_select(self, o: F4, a: F4, b: F4) -> F4 {
-        let mut r = b;
-        for ((r, (x, y)), v) in r.0.iter_mut().zip(self.0.iter().zip(o.0.iter())).zip(a.0) {
-            if *x > *y {
-                *r = v;
-            }
-        }
-        r
+        let (x, y) = (self.0, o.0);
+        b.blend(core::array::from_fn(|l| x[l] > y[l]), a)
     }
 
     /// Lane-wise `if self == o { a } else { b }`.
     #[inline]
     pub fn eq_select(self, o: F4, a: F4, b: F4) -> F4 {
-        let mut r = b;
-        for ((r, (x, y)), v) in r.0.iter_mut().zip(self.0.iter().zip(o.0.iter())).zip(a.0) {
-            if *x == *y {
-                *r = v;
-            }
-        }
-        r
+        let (x, y) = (self.0, o.0);
+        b.blend(core::array::from_fn(|l| x[l] == y[l]), a)
     }
 
     /// Lane-wise `if mask { a } else { self }`.
     #[inline]
     pub fn select_where(self, mask: [bool; 4], a: F4) -> F4 {
-        let mut r = self;
-        for ((r, m), v) in r.0.iter_mut().zip(mask).zip(a.0) {
-            if m {
-                *r = v;
-            }
-        }
-        r
+        self.blend(mask, a)
+    }
+
+    /// Lane-wise `if mask { a } else { self }` as a blend of bit patterns (all ones where
+    /// `mask`, all zeros elsewhere): the bits of one input or the other, never arithmetic,
+    /// written so that compilers emit a vector compare and blend instead of a branch per
+    /// lane.
+    #[inline]
+    fn blend(self, mask: [bool; 4], a: F4) -> F4 {
+        let (x, y) = (self.0, a.0);
+        F4(core::array::from_fn(|l| {
+            let m = 0u32.wrapping_sub(u32::from(mask[l]));
+            f32::from_bits((y[l].to_bits() & m) | (x[l].to_bits() & !m))
+        }))
     }
 }
 
@@ -304,6 +301,43 @@ mod tests {
             for l in 0..4 {
                 assert_eq!(dot.lane(l).to_bits(), a[l].dot(b[l]).to_bits());
                 assert_eq!(s.lane(l).to_bits(), scalar::sqrt(a[l].dot(b[l])).to_bits());
+            }
+        }
+    }
+
+    /// The selects are blends of bit patterns: each lane is exactly one input's bits
+    /// (NaN payloads and the sign of zero kept), chosen as the scalar `if` chooses,
+    /// NaN compares false.
+    #[test]
+    fn selects_pick_an_input_bit_for_bit_as_the_scalar_if() {
+        let nan = f32::from_bits(0x7fc0_1234);
+        let values = [
+            0.0,
+            -0.0,
+            1.5,
+            -2.0,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            nan,
+            -nan,
+        ];
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let mut pick = || values[(rng.next_u64() % values.len() as u64) as usize];
+        for _ in 0..2000 {
+            let [x, y, a, b]: [F4; 4] =
+                core::array::from_fn(|_| F4(core::array::from_fn(|_| pick())));
+            let mask: [bool; 4] = core::array::from_fn(|l| x.0[l].to_bits() & 1 == 0);
+            let gt = x.gt_select(y, a, b);
+            let eq = x.eq_select(y, a, b);
+            let sel = b.select_where(mask, a);
+            for (l, m) in mask.into_iter().enumerate() {
+                let (xl, yl, al, bl) = (x.lane(l), y.lane(l), a.lane(l), b.lane(l));
+                let want_gt = if xl > yl { al } else { bl };
+                let want_eq = if xl == yl { al } else { bl };
+                let want_sel = if m { al } else { bl };
+                assert_eq!(gt.lane(l).to_bits(), want_gt.to_bits());
+                assert_eq!(eq.lane(l).to_bits(), want_eq.to_bits());
+                assert_eq!(sel.lane(l).to_bits(), want_sel.to_bits());
             }
         }
     }
