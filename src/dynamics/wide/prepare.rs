@@ -310,7 +310,7 @@ fn keep_v(on: [bool; 4], v: &V4) -> V4 {
 }
 
 /// Write `v` into the lanes of quarter entry `at..at + 3` where `on`.
-#[inline]
+#[inline(always)]
 fn put_q(q: &mut [F4; QUARTER], at: usize, on: [bool; 4], v: &V4) {
     for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
         if let Some(d) = q.get_mut(at + i) {
