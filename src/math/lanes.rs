@@ -112,11 +112,15 @@ impl F4 {
     /// lane.
     #[inline]
     fn blend(self, mask: [bool; 4], a: F4) -> F4 {
-        let (x, y) = (self.0, a.0);
-        F4(core::array::from_fn(|l| {
-            let m = 0u32.wrapping_sub(u32::from(mask[l]));
-            f32::from_bits((y[l].to_bits() & m) | (x[l].to_bits() & !m))
-        }))
+        let [m0, m1, m2, m3] = mask.map(|m| 0u32.wrapping_sub(u32::from(m)));
+        let [x0, x1, x2, x3] = self.0.map(f32::to_bits);
+        let [y0, y1, y2, y3] = a.0.map(f32::to_bits);
+        F4([
+            f32::from_bits((y0 & m0) | (x0 & !m0)),
+            f32::from_bits((y1 & m1) | (x1 & !m1)),
+            f32::from_bits((y2 & m2) | (x2 & !m2)),
+            f32::from_bits((y3 & m3) | (x3 & !m3)),
+        ])
     }
 }
 
