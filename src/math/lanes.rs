@@ -89,15 +89,17 @@ impl F4 {
     /// Lane-wise `if self > o { a } else { b }`.
     #[inline]
     pub fn gt_select(self, o: F4, a: F4, b: F4) -> F4 {
-        let (x, y) = (self.0, o.0);
-        b.blend(core::array::from_fn(|l| x[l] > y[l]), a)
+        let [x0, x1, x2, x3] = self.0;
+        let [y0, y1, y2, y3] = o.0;
+        b.blend([x0 > y0, x1 > y1, x2 > y2, x3 > y3], a)
     }
 
     /// Lane-wise `if self == o { a } else { b }`.
     #[inline]
     pub fn eq_select(self, o: F4, a: F4, b: F4) -> F4 {
-        let (x, y) = (self.0, o.0);
-        b.blend(core::array::from_fn(|l| x[l] == y[l]), a)
+        let [x0, x1, x2, x3] = self.0;
+        let [y0, y1, y2, y3] = o.0;
+        b.blend([x0 == y0, x1 == y1, x2 == y2, x3 == y3], a)
     }
 
     /// Lane-wise `if mask { a } else { self }`.
