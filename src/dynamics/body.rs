@@ -336,6 +336,11 @@ impl<'a> BodyDesc<'a> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Body<'a> {
     pub shape: Shape<'a>,
+    /// `shape.bounding_radius()` (m), formed once: a body's shape never changes, and the
+    /// contact update, continuous collision and the broad phase read it for every pair or
+    /// body in every step (a cuboid's is a square root, a hull's a load through its
+    /// reference).
+    pub bounding_radius: f32,
     pub kind: BodyKind,
     /// Pose of the body frame (the shape's frame) in the world.
     pub pose: Iso,
@@ -475,6 +480,7 @@ impl<'a> Body<'a> {
         let still = d.kind == BodyKind::Static;
         let mut b = Body {
             shape: d.shape,
+            bounding_radius: d.shape.bounding_radius(),
             kind: d.kind,
             pose,
             center_local,
@@ -548,10 +554,7 @@ impl<'a> Body<'a> {
     /// The box of the shape's bounding sphere about the body's origin.
     #[inline]
     fn sphere_bounds(&self) -> Aabb {
-        Aabb::from_center_half(
-            self.pose.position,
-            Vec3::splat(self.shape.bounding_radius()),
-        )
+        Aabb::from_center_half(self.pose.position, Vec3::splat(self.bounding_radius))
     }
 
     /// True for a dynamic body.

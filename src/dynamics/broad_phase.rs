@@ -70,7 +70,6 @@ use super::solver::clamp_length;
 use crate::collide::{movement_bounds, Motion};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Aabb};
-use crate::shape::Shape;
 
 /// Category bit of a static body's leaf.
 const STATIC: u8 = 0b001;
@@ -408,10 +407,8 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
         body.refresh_bounds_from(now);
         // Most bodies stay well inside their enlarged box: a cheap cover of the movement
         // bounds settles it (the same answer: the bounds lie inside the cover).
-        if body
-            .fat
-            .contains(&grown(movement_cover(&body.shape, &motion, now, cfg.dt)))
-        {
+        let cover = movement_cover(body.bounding_radius, &motion, now, cfg.dt);
+        if body.fat.contains(&grown(cover)) {
             continue;
         }
         let tight = grown(movement_bounds(&body.shape, &motion, cfg.dt));
@@ -475,14 +472,14 @@ fn body_motion(body: &Body<'_>, cfg: &WorldConfig) -> (Motion, Option<f32>) {
     (motion, arc)
 }
 
-/// A box that holds [`movement_bounds`]`(shape, motion, dt)`, for about a tenth of its
-/// cost (no rotation is integrated; `now` is the shape's box at `motion.pose`): that
-/// box and the same box moved by `v dt`, grown by how far a turn of `W = |ω| dt` moves a
-/// point within the shape's bounding radius `R` of the origin (a chord, at most `R W`),
-/// by the bulge the bounds allow (`R W² / 7`) and by a rounding guard ten times theirs.
-fn movement_cover(shape: &Shape<'_>, motion: &Motion, now: Aabb, dt: f32) -> Aabb {
+/// A box that holds [`movement_bounds`]`(shape, motion, dt)` of a shape of bounding
+/// radius `r` (`Shape::bounding_radius`), for about a tenth of its cost (no rotation is
+/// integrated; `now` is the shape's box at `motion.pose`): that box and the same box
+/// moved by `v dt`, grown by how far a turn of `W = |ω| dt` moves a point within `r` of
+/// the origin (a chord, at most `r W`), by the bulge the bounds allow (`r W² / 7`) and by
+/// a rounding guard ten times theirs.
+fn movement_cover(r: f32, motion: &Motion, now: Aabb, dt: f32) -> Aabb {
     let shift = motion.linear * dt;
-    let r = shape.bounding_radius();
     let w = motion.angular.length() * scalar::abs(dt);
     let c0 = motion.pose.position;
     let guard = COVER_ROUNDING * (r + c0.abs().max_elem() + (c0 + shift).abs().max_elem());
@@ -827,7 +824,12 @@ mod tests {
             };
             let dt = 1.0 / 60.0;
             let exact = movement_bounds(&shape, &motion, dt);
-            let cover = movement_cover(&shape, &motion, shape.aabb(&motion.pose), dt);
+            let cover = movement_cover(
+                shape.bounding_radius(),
+                &motion,
+                shape.aabb(&motion.pose),
+                dt,
+            );
             assert!(
                 cover.contains(&exact),
                 "case {i}: {cover:?} misses {exact:?}"

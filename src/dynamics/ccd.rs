@@ -195,7 +195,7 @@ fn fast_motion(b: &Body<'_>, cfg: &WorldConfig, h: f32) -> Option<Motion> {
         return None;
     }
     let sweep = (b.pose.position - b.pose0.position).length()
-        + b.angular_velocity.length() * h * b.shape.bounding_radius();
+        + b.angular_velocity.length() * h * b.bounding_radius;
     if sweep > cfg.ccd_motion_fraction * b.shape.min_extent() {
         Some(motion_of(b, h))
     } else {

@@ -593,8 +593,8 @@ fn update_one<const N: usize>(
 #[inline]
 fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
     (b.linear_velocity - a.linear_velocity).length()
-        + a.angular_velocity.length() * a.shape.bounding_radius()
-        + b.angular_velocity.length() * b.shape.bounding_radius()
+        + a.angular_velocity.length() * a.bounding_radius
+        + b.angular_velocity.length() * b.bounding_radius
 }
 
 /// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
