@@ -600,3 +600,45 @@ impl<'a> Body<'a> {
         self.update_inertia();
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shape::ConvexHull;
+
+    #[test]
+    fn a_body_keeps_its_shapes_bounding_radius_to_the_bit() {
+        let points = [
+            Vec3::new(0.3, -0.2, 0.1),
+            Vec3::new(-0.4, 0.5, 0.2),
+            Vec3::new(0.1, 0.2, -0.6),
+            Vec3::new(0.2, 0.7, 0.5),
+            Vec3::new(-0.3, -0.4, -0.2),
+        ];
+        let hull = ConvexHull::new(&points).unwrap();
+        let shapes = [
+            Shape::sphere(0.7).unwrap(),
+            Shape::capsule(0.9, 0.2).unwrap(),
+            Shape::cuboid(Vec3::new(0.5, 0.25, 1.5)).unwrap(),
+            Shape::triangle(Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 1.0)).unwrap(),
+            Shape::half_space(Vec3::Y).unwrap(),
+            Shape::hull(&hull),
+        ];
+        let mut built = 0;
+        for shape in shapes {
+            // A half-space or triangle cannot be dynamic: those descriptions are refused.
+            for desc in [BodyDesc::dynamic(shape), BodyDesc::fixed(shape)] {
+                let Ok(body) = Body::from_desc(&desc.position(Vec3::new(1.0, 2.0, 3.0))) else {
+                    continue;
+                };
+                built += 1;
+                assert_eq!(
+                    body.bounding_radius.to_bits(),
+                    shape.bounding_radius().to_bits(),
+                    "{shape:?}"
+                );
+            }
+        }
+        assert!(built >= 10, "{built} bodies built");
+    }
+}
