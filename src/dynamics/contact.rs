@@ -402,8 +402,6 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let mut write = 0usize;
     let len = contacts.len();
     let mut tested = 0u32;
-    // The report's counts of the contacts kept, counted as they are kept.
-    let (mut with_points, mut points) = (0u32, 0u32);
     let (mut group_key, mut group_start) = (u64::MAX, 0usize);
     let slots = contacts.as_mut_slice();
     for read in 0..len {
@@ -447,17 +445,17 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
         }
         if kept {
             write += 1;
-            if c.len > 0 {
-                with_points = with_points.saturating_add(1);
-                points = points.saturating_add(u32::from(c.len));
-            }
         }
     }
     contacts.truncate(write);
     hit_events(contacts, bodies, cfg, events, report);
     report.pairs = tested;
-    report.contacts = with_points;
-    report.points = points;
+    report.contacts = 0;
+    report.points = 0;
+    for c in contacts.iter().filter(|c| c.len > 0) {
+        report.contacts = report.contacts.saturating_add(1);
+        report.points = report.points.saturating_add(u32::from(c.len));
+    }
 }
 
 /// A part contact stays while its pair does (its narrow phase runs with its record's).
