@@ -95,6 +95,7 @@ use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
 use crate::dynamics::mid_phase;
 use crate::dynamics::pool::Pool;
+use crate::math::lanes::{Pose4, V4};
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
 
@@ -819,11 +820,10 @@ fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfi
     let was_touching = c.touching;
     c.touching = false;
     let len = usize::from(c.len);
-    for p in c.points.iter_mut().take(len) {
-        let p_a = body_a.pose.transform_point(p.local_a);
-        let p_b = body_b.pose.transform_point(p.local_b);
-        p.separation = (p_b - p_a).dot(n);
-        c.touching |= p.separation <= cfg.slop;
+    let separations = anchor_separations(c, body_a, body_b, n);
+    for (p, s) in c.points.iter_mut().take(len).zip(separations) {
+        p.separation = s;
+        c.touching |= s <= cfg.slop;
     }
     // Closing speeds are read by hit events only: a convex pair with points is due one
     // when it starts touching (`update_one`); a part contact whenever its group is.
@@ -838,6 +838,20 @@ fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfi
             p.approach_speed = (v_a - v_b).dot(n);
         }
     }
+}
+
+/// The separations `(p_b − p_a)·n` of `c`'s points (m), their anchors placed at the
+/// bodies' poses (`p = R l + t`): the four point slots side by side, one per lane (the
+/// slots past the count are not read), each lane the scalar `Iso::transform_point` and
+/// `Vec3::dot` to the bit.
+#[inline]
+fn anchor_separations(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, n: Vec3) -> [f32; 4] {
+    let [p0, p1, p2, p3] = &c.points;
+    let local_a = V4::from_lanes([p0.local_a, p1.local_a, p2.local_a, p3.local_a]);
+    let local_b = V4::from_lanes([p0.local_b, p1.local_b, p2.local_b, p3.local_b]);
+    let p_a = Pose4::splat(&body_a.pose).transform_point(&local_a);
+    let p_b = Pose4::splat(&body_b.pose).transform_point(&local_b);
+    p_b.sub(&p_a).dot(&V4::splat(n)).0
 }
 
 /// Fill `c` (no points yet) from a manifold: world and local normal, body-frame anchors,
@@ -1051,6 +1065,38 @@ mod tests {
         };
         c.points[..points.len()].copy_from_slice(points);
         c
+    }
+
+    /// A reuse's separations, the points side by side, are the scalar
+    /// `(p_b − p_a)·n` with `p = pose · anchor`, to the bit, for every point count.
+    #[test]
+    fn reused_separations_match_the_scalar_formula_bit_for_bit() {
+        use crate::dynamics::body::BodyDesc;
+        use crate::shape::Shape;
+        let mut rng = crate::rng::SplitMix64::new(41);
+        let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+        for round in 0..500 {
+            let body = |rng: &mut crate::rng::SplitMix64| {
+                let d = BodyDesc::dynamic(cube)
+                    .position(rng.unit_vector() * rng.range(-20.0, 20.0))
+                    .rotation(rng.rotation());
+                Body::from_desc(&d).unwrap()
+            };
+            let (a, b) = (body(&mut rng), body(&mut rng));
+            let len = round % 5;
+            let points: [ContactPoint; 4] = core::array::from_fn(|j| {
+                let v = |rng: &mut crate::rng::SplitMix64| rng.unit_vector() * rng.range(0.0, 0.9);
+                point(j as u64, v(&mut rng), v(&mut rng), 0.0)
+            });
+            let c = contact(points.get(..len).unwrap());
+            let n = rng.unit_vector();
+            let got = anchor_separations(&c, &a, &b, n);
+            for (j, p) in c.points().iter().enumerate() {
+                let want =
+                    (b.pose.transform_point(p.local_b) - a.pose.transform_point(p.local_a)).dot(n);
+                assert_eq!(got[j].to_bits(), want.to_bits(), "round {round} point {j}");
+            }
+        }
     }
 
     /// Ids first, then the nearest free old point within 2 slop; each old point once.

@@ -18,7 +18,8 @@ use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
 use super::*;
 use crate::config::WorldConfig;
-use crate::math::{scalar, Mat3, Quat};
+use crate::math::lanes::Pose4;
+use crate::math::{scalar, Mat3};
 
 /// A 3×3 matrix per lane, by columns (as [`Mat3`]).
 #[derive(Clone, Copy, Default)]
@@ -52,32 +53,6 @@ impl M4 {
             y: self.y.dot(v),
             z: self.z.dot(v),
         }
-    }
-}
-
-/// A pose per lane: the rotation as a quaternion and the translation.
-#[derive(Clone, Copy, Default)]
-struct Pose4 {
-    u: V4,
-    w: F4,
-    position: V4,
-}
-
-impl Pose4 {
-    fn set(&mut self, l: usize, q: Quat, position: Vec3) {
-        self.u.set(l, q.xyz());
-        self.w.set(l, q.w);
-        self.position.set(l, position);
-    }
-
-    /// `R p + t`, as `Iso::transform_point` (`Quat::rotate`: `t = 2 u × p`,
-    /// `p + w t + u × t`).
-    #[inline]
-    fn transform_point(&self, p: &V4) -> V4 {
-        let t = self.u.cross(p).scale(F4::splat(2.0));
-        p.add(&t.scale(self.w))
-            .add(&self.u.cross(&t))
-            .add(&self.position)
     }
 }
 
