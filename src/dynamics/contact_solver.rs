@@ -216,7 +216,8 @@ pub(crate) struct ConstraintPoint {
     pub total_impulse: f32,
     /// Normal speed `v_n` at prepare, before this step's gravity (m/s); the solve lowers
     /// it to the closing speed the point had when it first pushed (the impact speed,
-    /// with the gravity of the sub-steps before it).
+    /// with the gravity of the sub-steps before it). Read by the restitution passes
+    /// only, so 0 (not formed) for a contact without restitution.
     pub normal_speed0: f32,
     /// Bounced by the collision pass before the sub-steps.
     pub bounced: bool,
@@ -490,7 +491,11 @@ pub(crate) fn prepare<const N: usize>(
         let in_a = i_a.mul_vec(rn_a);
         let in_b = i_b.mul_vec(rn_b);
         let normal_mass = inverse_or_zero(m_a + m_b + rn_a.dot(in_a) + rn_b.dot(in_b));
-        let vn = ((vb + wb.cross(r_b)) - (va + wa.cross(r_a))).dot(n);
+        let vn = if k.restitution > 0.0 {
+            ((vb + wb.cross(r_b)) - (va + wa.cross(r_a))).dot(n)
+        } else {
+            0.0
+        };
         let normal_impulse = scalar::min(p.normal_impulse, normal_mass * speed_bound);
         *dst = ConstraintPoint {
             local_a: rot_a.map_or(core_a, |r| r.transpose_mul_vec(core_a)),

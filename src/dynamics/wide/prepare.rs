@@ -337,10 +337,6 @@ fn prepare_rows(
         let in_b = x.i_b.mul_vec(&rn_b);
         let k = x.m_a + x.m_b + rn_a.dot(&in_a) + rn_b.dot(&in_b);
         let normal_mass = per_lane(k, inverse_or_zero);
-        let closing =
-            x.vb.add(&x.wb.cross(&r_b))
-                .sub(&x.va.add(&x.wa.cross(&r_a)));
-        let vn = closing.dot(n);
         let stored = x.impulse.get(j).copied().unwrap_or_default();
         let cap = normal_mass * speed_bound;
         let impulse = F4(core::array::from_fn(|l| {
@@ -375,9 +371,10 @@ fn prepare_rows(
         put(&mut p.separation, on, keep(here, sep));
         put(&mut p.separation0, on, keep(here, sep));
         put(&mut p.total_impulse, on, zero);
-        put(&mut p.normal_speed0, on, keep(here, vn));
+        put(&mut p.normal_speed0, on, zero);
         put(&mut p.bounced, on, zero);
     }
+    normal_speeds(group, x, rows);
     // Point rows no lane has: empty.
     for j in rows..4 {
         let p = group.point_mut(j);
@@ -459,6 +456,34 @@ fn prepare_rows(
         }
     }
     prepare_angular_rows(group, x, &r_a, &r_b, lanes, contacts, radius_sum);
+}
+
+/// The normal speeds `v_n` at prepare of the point rows, in the lanes with restitution
+/// (the only ones the restitution passes read; the others keep 0), as the scalar
+/// prepare forms them. A group without restitution (most) skips them.
+fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize) {
+    let restitution = f4(&group.s0.s, RESTITUTION);
+    let bouncy: [bool; 4] = core::array::from_fn(|l| {
+        x.on.get(l).copied().unwrap_or(false) && restitution.lane(l) > 0.0
+    });
+    if bouncy == [false; 4] {
+        return;
+    }
+    for j in 0..rows {
+        let (Some(&here), Some(la), Some(lb)) =
+            (x.point.get(j), x.local_a.get(j), x.local_b.get(j))
+        else {
+            break;
+        };
+        let r_a = x.pose_a.transform_point(la).sub(&x.center_a);
+        let r_b = x.pose_b.transform_point(lb).sub(&x.center_b);
+        let closing =
+            x.vb.add(&x.wb.cross(&r_b))
+                .sub(&x.va.add(&x.wa.cross(&r_a)));
+        let vn = keep(here, closing.dot(&x.n));
+        let p = group.point_mut(j);
+        p.normal_speed0 = p.normal_speed0.select_where(bouncy, vn);
+    }
 }
 
 /// The friction patch at the centre (lever arms `r_a`, `r_b`), as
