@@ -511,7 +511,7 @@ fn update_group(
     let reach = pair_reach(a, b, cfg);
     let reusable = group
         .iter()
-        .all(|c| plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c)));
+        .all(|c| plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, b)));
     if reusable {
         for c in group.iter_mut() {
             reuse(c, a, b, cfg);
@@ -621,7 +621,7 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         c.touching = false;
         return;
     };
-    if plan.reusable(c) {
+    if plan.reusable(c, body_b) {
         reuse(c, body_a, body_b, cfg);
     } else {
         let old_points = c.points;
@@ -695,14 +695,20 @@ fn plan<'a>(
 }
 
 impl Plan<'_> {
-    /// True when the manifold `c` holds may be reused (module docs, "Manifold reuse").
-    fn reusable(&self, c: &Contact) -> bool {
+    /// True when the manifold `c` holds may be reused (module docs, "Manifold reuse");
+    /// `body_b` is the pair's body B.
+    fn reusable(&self, c: &Contact, body_b: &Body<'_>) -> bool {
         if c.built_margin < 0.0 {
             return false;
         }
         let slack = reuse_slack(&self.shape_a, &self.shape_b);
         let fits = |drift: f32| drift <= slack && self.margin + drift <= c.built_margin;
-        let drift = relative_drift(&c.built_pose, &self.b_in_a, self.shape_b.bounding_radius());
+        // B's radius: the body's kept one for a convex pair (the same bits), else its part's.
+        let radius_b = match self.parts {
+            None => body_b.bounding_radius,
+            Some(_) => self.shape_b.bounding_radius(),
+        };
+        let drift = relative_drift(&c.built_pose, &self.b_in_a, radius_b);
         if fits(drift) {
             return true;
         }
