@@ -106,39 +106,28 @@ pub(crate) fn prepare_group<const N: usize>(
     cfg: &WorldConfig,
 ) {
     let mut x = Inputs::default();
-    for (l, &ci) in lanes.iter().enumerate() {
+    let [c0, c1, c2, c3] = *lanes;
+    // Lane by lane with the lane a constant, so each lane's writes are plain stores.
+    let mut lane = |l: usize, ci: u32| {
         if let Some(c) = contacts.get(ci as usize) {
-            gather_lane(group, &mut x, l, ci, c, bodies, solver_bodies, solver_index);
+            let (b, sb, si) = (bodies, solver_bodies, solver_index);
+            gather_lane(group, &mut x, l, ci, c, b, sb, si, softness);
         }
-    }
+    };
+    lane(0, c0);
+    lane(1, c1);
+    lane(2, c2);
+    lane(3, c3);
     if x.on == [false; 4] {
         return;
-    }
-    let s = [softness[0], softness[1]];
-    for l in 0..4 {
-        let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
-            continue;
-        };
-        if !x.on.get(l).copied().unwrap_or(false) {
-            continue;
-        }
-        let rigid = |slot: u32| {
-            bodies
-                .at(slot as usize)
-                .is_none_or(|b| b.kind != BodyKind::Dynamic)
-        };
-        let soft = if rigid(c.a) || rigid(c.b) { s[1] } else { s[0] };
-        let q0 = &mut group.s0.s;
-        set_lane(q0, BIAS_RATE, l, soft.bias_rate);
-        set_lane(q0, MASS_SCALE, l, soft.mass_scale);
-        set_lane(q0, IMPULSE_SCALE, l, soft.impulse_scale);
     }
     prepare_rows(group, &x, lanes, contacts, cfg);
 }
 
 /// Lane `l`'s inputs (contact `ci`), the checks of the scalar prepare, and the per-lane
-/// values the rows copy as they are.
+/// values the rows copy as they are (the softness too).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn gather_lane<const N: usize>(
     group: &mut Group<'_>,
     x: &mut Inputs,
@@ -148,6 +137,7 @@ fn gather_lane<const N: usize>(
     bodies: &Pool<Body<'_>, N>,
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
+    softness: &[Softness; 2],
 ) {
     let Some(side) = sides(c, bodies, solver_bodies, solver_index) else {
         return;
@@ -216,6 +206,16 @@ fn gather_lane<const N: usize>(
     set_lane(q0, MU_S, l, m.static_friction);
     set_lane(q0, MU_K, l, m.kinetic_friction);
     set_lane(q0, RESTITUTION, l, m.restitution);
+    // Twice the stiffness against a body that does not respond (static or kinematic).
+    let rigid_partner = body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic;
+    let soft = if rigid_partner {
+        softness[1]
+    } else {
+        softness[0]
+    };
+    set_lane(q0, BIAS_RATE, l, soft.bias_rate);
+    set_lane(q0, MASS_SCALE, l, soft.mass_scale);
+    set_lane(q0, IMPULSE_SCALE, l, soft.impulse_scale);
     if let Some(v) = group.s0.idx.get_mut(l) {
         *v = if sa.is_some() { ia } else { NONE };
     }
