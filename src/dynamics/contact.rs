@@ -509,9 +509,9 @@ fn update_group(
 ) {
     // The pair's sweep reach is the same for every part: taken once.
     let reach = pair_reach(a, b, cfg);
-    let reusable = group
-        .iter()
-        .all(|c| plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, b)));
+    let reusable = group.iter().all(|c| {
+        plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius()))
+    });
     if reusable {
         for c in group.iter_mut() {
             reuse(c, a, b, cfg);
@@ -621,7 +621,12 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         c.touching = false;
         return;
     };
-    if plan.reusable(c, body_b) {
+    // B's radius: the body's kept one for a convex pair (the same bits as its shape's).
+    let radius_b = match plan.parts {
+        None => body_b.bounding_radius,
+        Some(_) => plan.shape_b.bounding_radius(),
+    };
+    if plan.reusable(c, radius_b) {
         reuse(c, body_a, body_b, cfg);
     } else {
         let old_points = c.points;
@@ -696,18 +701,13 @@ fn plan<'a>(
 
 impl Plan<'_> {
     /// True when the manifold `c` holds may be reused (module docs, "Manifold reuse");
-    /// `body_b` is the pair's body B.
-    fn reusable(&self, c: &Contact, body_b: &Body<'_>) -> bool {
+    /// `radius_b` is `shape_b`'s bounding radius (m).
+    fn reusable(&self, c: &Contact, radius_b: f32) -> bool {
         if c.built_margin < 0.0 {
             return false;
         }
         let slack = reuse_slack(&self.shape_a, &self.shape_b);
         let fits = |drift: f32| drift <= slack && self.margin + drift <= c.built_margin;
-        // B's radius: the body's kept one for a convex pair (the same bits), else its part's.
-        let radius_b = match self.parts {
-            None => body_b.bounding_radius,
-            Some(_) => self.shape_b.bounding_radius(),
-        };
         let drift = relative_drift(&c.built_pose, &self.b_in_a, radius_b);
         if fits(drift) {
             return true;
@@ -826,10 +826,22 @@ fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfi
     let was_touching = c.touching;
     c.touching = false;
     let len = usize::from(c.len);
-    let separations = anchor_separations(c, body_a, body_b, n);
-    for (p, s) in c.points.iter_mut().take(len).zip(separations) {
-        p.separation = s;
-        c.touching |= s <= cfg.slop;
+    if len == 4 {
+        // A full manifold (a face on a face): the four points side by side.
+        let separations = anchor_separations(c, body_a, body_b, n);
+        for (p, s) in c.points.iter_mut().zip(separations) {
+            p.separation = s;
+            c.touching |= s <= cfg.slop;
+        }
+    } else {
+        // Fewer points (spheres, capsules, edges, mesh parts): one at a time costs less
+        // than four lanes, for the same bits.
+        for p in c.points.iter_mut().take(len) {
+            let p_a = body_a.pose.transform_point(p.local_a);
+            let p_b = body_b.pose.transform_point(p.local_b);
+            p.separation = (p_b - p_a).dot(n);
+            c.touching |= p.separation <= cfg.slop;
+        }
     }
     // Closing speeds are read by hit events only: a convex pair with points is due one
     // when it starts touching (`update_one`); a part contact whenever its group is.
@@ -849,7 +861,7 @@ fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfi
 /// The separations `(p_b − p_a)·n` of `c`'s points (m), their anchors placed at the
 /// bodies' poses (`p = R l + t`): the four point slots side by side, one per lane (the
 /// slots past the count are not read), each lane the scalar `Iso::transform_point` and
-/// `Vec3::dot` to the bit.
+/// `Vec3::dot` to the bit, as [`reuse`] forms them one at a time for fewer points.
 #[inline]
 fn anchor_separations(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, n: Vec3) -> [f32; 4] {
     let [p0, p1, p2, p3] = &c.points;
