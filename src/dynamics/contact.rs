@@ -514,7 +514,7 @@ fn update_group(
     });
     if reusable {
         for c in group.iter_mut() {
-            reuse(c, a, b, cfg);
+            reuse(c, a, b, cfg, None);
         }
         return;
     }
@@ -627,7 +627,10 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         Some(_) => plan.shape_b.bounding_radius(),
     };
     if plan.reusable(c, radius_b) {
-        reuse(c, body_a, body_b, cfg);
+        // A convex pair's anchors are in its bodies' frames, whose relative pose the
+        // reuse test formed: its separations are measured in A's frame.
+        let b_in_a = plan.parts.is_none().then_some(&plan.b_in_a);
+        reuse(c, body_a, body_b, cfg, b_in_a);
     } else {
         let old_points = c.points;
         let old = old_points.get(..usize::from(c.len)).unwrap_or(&[]);
@@ -819,28 +822,46 @@ fn relative_drift(from: &Iso, to: &Iso, radius_b: f32) -> f32 {
 }
 
 /// The manifold at the current poses: same points and impulses, separations and the
-/// world normal recomputed (module docs).
-fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
+/// world normal recomputed (module docs). For a convex pair `b_in_a` is B's pose in A's
+/// frame (the reuse test's): each separation is then measured in A's frame, `(T l_b −
+/// l_a)·n_A` with `T` = `b_in_a` and `n_A` the normal in A's frame, one rotation per
+/// point; a part contact (`None`: its parts' frames are not its bodies') measures in the
+/// world frame, `(R_b l_b + t_b − R_a l_a − t_a)·n`.
+fn reuse(
+    c: &mut Contact,
+    body_a: &Body<'_>,
+    body_b: &Body<'_>,
+    cfg: &WorldConfig,
+    b_in_a: Option<&Iso>,
+) {
     let n = body_a.pose.transform_vector(c.normal_local);
     c.normal = n;
     let was_touching = c.touching;
     c.touching = false;
     let len = usize::from(c.len);
-    if len == 4 {
-        // A full manifold (a face on a face): the four points side by side.
-        let separations = anchor_separations(c, body_a, body_b, n);
-        for (p, s) in c.points.iter_mut().zip(separations) {
-            p.separation = s;
-            c.touching |= s <= cfg.slop;
+    match b_in_a {
+        Some(rel) if len == 4 => {
+            // A full manifold (a face on a face): the four points side by side.
+            let separations = separations_in_a(c, rel);
+            for (p, s) in c.points.iter_mut().zip(separations) {
+                p.separation = s;
+                c.touching |= s <= cfg.slop;
+            }
         }
-    } else {
-        // Fewer points (spheres, capsules, edges, mesh parts): one at a time costs less
-        // than four lanes, for the same bits.
-        for p in c.points.iter_mut().take(len) {
-            let p_a = body_a.pose.transform_point(p.local_a);
-            let p_b = body_b.pose.transform_point(p.local_b);
-            p.separation = (p_b - p_a).dot(n);
-            c.touching |= p.separation <= cfg.slop;
+        Some(rel) => {
+            let n_a = c.normal_local;
+            for p in c.points.iter_mut().take(len) {
+                p.separation = (rel.transform_point(p.local_b) - p.local_a).dot(n_a);
+                c.touching |= p.separation <= cfg.slop;
+            }
+        }
+        None => {
+            for p in c.points.iter_mut().take(len) {
+                let p_a = body_a.pose.transform_point(p.local_a);
+                let p_b = body_b.pose.transform_point(p.local_b);
+                p.separation = (p_b - p_a).dot(n);
+                c.touching |= p.separation <= cfg.slop;
+            }
         }
     }
     // Closing speeds are read by hit events only: a convex pair with points is due one
@@ -858,18 +879,18 @@ fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfi
     }
 }
 
-/// The separations `(p_b − p_a)·n` of `c`'s points (m), their anchors placed at the
-/// bodies' poses (`p = R l + t`): the four point slots side by side, one per lane (the
-/// slots past the count are not read), each lane the scalar `Iso::transform_point` and
-/// `Vec3::dot` to the bit, as [`reuse`] forms them one at a time for fewer points.
+/// The separations `(T l_b − l_a)·n_A` of `c`'s points (m) in A's frame (`T` = `b_in_a`,
+/// B's pose in A's frame; `n_A` the normal in A's frame): the four point slots side by
+/// side, one per lane (the slots past the count are not read), each lane the scalar
+/// `Iso::transform_point` and `Vec3::dot` to the bit, as [`reuse`] forms them one at a
+/// time for fewer points.
 #[inline]
-fn anchor_separations(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, n: Vec3) -> [f32; 4] {
+fn separations_in_a(c: &Contact, b_in_a: &Iso) -> [f32; 4] {
     let [p0, p1, p2, p3] = &c.points;
     let local_a = V4::from_lanes([p0.local_a, p1.local_a, p2.local_a, p3.local_a]);
     let local_b = V4::from_lanes([p0.local_b, p1.local_b, p2.local_b, p3.local_b]);
-    let p_a = Pose4::splat(&body_a.pose).transform_point(&local_a);
-    let p_b = Pose4::splat(&body_b.pose).transform_point(&local_b);
-    p_b.sub(&p_a).dot(&V4::splat(n)).0
+    let p_b = Pose4::splat(b_in_a).transform_point(&local_b);
+    p_b.sub(&local_a).dot(&V4::splat(c.normal_local)).0
 }
 
 /// Fill `c` (no points yet) from a manifold: world and local normal, body-frame anchors,
@@ -1085,34 +1106,37 @@ mod tests {
         c
     }
 
-    /// A reuse's separations, the points side by side, are the scalar
-    /// `(p_b − p_a)·n` with `p = pose · anchor`, to the bit, for every point count.
+    /// A reuse's separations in A's frame, the points side by side, are the scalar
+    /// `(T l_b − l_a)·n_A` to the bit, for every point count; and they agree with the
+    /// world frame's `(p_b − p_a)·n` to rounding.
     #[test]
-    fn reused_separations_match_the_scalar_formula_bit_for_bit() {
-        use crate::dynamics::body::BodyDesc;
-        use crate::shape::Shape;
+    fn reused_separations_in_a_match_the_scalar_formula_bit_for_bit() {
         let mut rng = crate::rng::SplitMix64::new(41);
-        let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
         for round in 0..500 {
-            let body = |rng: &mut crate::rng::SplitMix64| {
-                let d = BodyDesc::dynamic(cube)
-                    .position(rng.unit_vector() * rng.range(-20.0, 20.0))
-                    .rotation(rng.rotation());
-                Body::from_desc(&d).unwrap()
+            let pose = |rng: &mut crate::rng::SplitMix64| {
+                Iso::new(rng.unit_vector() * rng.range(-20.0, 20.0), rng.rotation())
             };
-            let (a, b) = (body(&mut rng), body(&mut rng));
+            let (pose_a, pose_b) = (pose(&mut rng), pose(&mut rng));
             let len = round % 5;
             let points: [ContactPoint; 4] = core::array::from_fn(|j| {
                 let v = |rng: &mut crate::rng::SplitMix64| rng.unit_vector() * rng.range(0.0, 0.9);
                 point(j as u64, v(&mut rng), v(&mut rng), 0.0)
             });
-            let c = contact(points.get(..len).unwrap());
+            let mut c = contact(points.get(..len).unwrap());
             let n = rng.unit_vector();
-            let got = anchor_separations(&c, &a, &b, n);
+            c.normal_local = pose_a.inverse_transform_vector(n);
+            let rel = pose_a.inv_mul(&pose_b);
+            let got = separations_in_a(&c, &rel);
             for (j, p) in c.points().iter().enumerate() {
-                let want =
-                    (b.pose.transform_point(p.local_b) - a.pose.transform_point(p.local_a)).dot(n);
+                let want = (rel.transform_point(p.local_b) - p.local_a).dot(c.normal_local);
                 assert_eq!(got[j].to_bits(), want.to_bits(), "round {round} point {j}");
+                let world =
+                    (pose_b.transform_point(p.local_b) - pose_a.transform_point(p.local_a)).dot(n);
+                assert!(
+                    (got[j] - world).abs() < 2e-5,
+                    "round {round}: {} against {world}",
+                    got[j]
+                );
             }
         }
     }
