@@ -168,17 +168,17 @@ pub(crate) fn sphere_sphere(
 /// unit, when the centres coincide), the separation `|d| − r_a − r_b`, and the points
 /// `c_a + r_a n`, `c_b − r_b n`. The answer is symmetric to the bit: swapping the spheres
 /// negates `d` exactly, so the normal flips and the points swap (the fallback is the
-/// caller's to keep symmetric). One point, written to `out`; false (and `out` unspecified)
-/// when apart by more than `margin` or when a number is not finite.
-pub(crate) fn sphere_sphere_world(
+/// caller's to keep symmetric). The normal and the one point; `None` when apart by more
+/// than `margin` (the numbers are not checked for finiteness: [`write_one_point`] does).
+#[inline]
+pub(crate) fn sphere_sphere_point(
     a: &Sphere,
     pose_a: &Iso,
     b: &Sphere,
     pose_b: &Iso,
     fallback: impl Fn() -> Vec3,
     margin: f32,
-    out: &mut Manifold,
-) -> bool {
+) -> Option<(Vec3, ManifoldPoint)> {
     let d = pose_b.position - pose_a.position;
     let (normal, distance) = d
         .normalize_and_length()
@@ -186,7 +186,7 @@ pub(crate) fn sphere_sphere_world(
     let separation = distance - (a.radius + b.radius);
     let within = separation <= margin; // false for NaN too
     if !within {
-        return false;
+        return None;
     }
     let (on_a, on_b) = (normal * a.radius, normal * -b.radius);
     let point = ManifoldPoint {
@@ -200,7 +200,7 @@ pub(crate) fn sphere_sphere_world(
             b: FeatureId::vertex(0),
         },
     };
-    write_one_point(normal, point, out)
+    Some((normal, point))
 }
 
 /// Sphere `a` at `pose_a` against box `b` at `pose_b` (world frame, unit rotations), in
@@ -316,7 +316,7 @@ fn one_sphere_point(pose_a: &Iso, r: f32, pose_b: &Iso, on: &SphereOn, out: &mut
 
 /// Write the one-point manifold `(normal, point)` into `out`; false (and `out` as it
 /// was) when a number of it is not finite.
-fn write_one_point(normal: Vec3, point: ManifoldPoint, out: &mut Manifold) -> bool {
+pub(crate) fn write_one_point(normal: Vec3, point: ManifoldPoint, out: &mut Manifold) -> bool {
     // `&`, not `&&`: the usual answer is true, so every check runs anyway.
     let finite = normal.is_finite()
         & point.point_a.is_finite()

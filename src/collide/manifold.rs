@@ -35,7 +35,7 @@ use super::sat::{self, PairCache, SatOutcome, TrianglePolytope, SAT_TOLERANCE};
 use super::Proxy;
 use crate::error::{non_negative, Error, Input};
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::{Capsule, Face, FeatureId, Shape};
+use crate::shape::{Capsule, Face, FeatureId, Shape, Sphere};
 use core::cmp::Ordering;
 
 /// Most points in a manifold.
@@ -422,6 +422,34 @@ fn order_rank(s: &Shape) -> u8 {
     }
 }
 
+/// Two spheres at their world poses, in closed form in the world frame, in either order:
+/// the normal from `a` to `b` and the one point, or `None` when they are apart by more
+/// than `margin` (the numbers are not checked for finiteness). Rotations are
+/// renormalised first, as every pair's are. Coincident centres take world +Y from the
+/// pair's canonical A to its B (as the general path does), so both orders agree: the
+/// answer of `(b, a)` is that of `(a, b)` flipped, to the bit. [`contact`] gives the same
+/// point (the dynamics' sphere pairs call this directly).
+#[inline]
+pub(crate) fn sphere_pair(
+    a: &Sphere,
+    pose_a: &Iso,
+    b: &Sphere,
+    pose_b: &Iso,
+    margin: f32,
+) -> Option<(Vec3, ManifoldPoint)> {
+    let pose_a = Iso::new(pose_a.position, pose_a.rotation.normalize());
+    let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
+    let fallback = || {
+        let (sa, sb) = (Shape::Sphere(*a), Shape::Sphere(*b));
+        if pair_order(&sb, &pose_b, &sa, &pose_a) == Ordering::Less {
+            -Vec3::Y
+        } else {
+            Vec3::Y
+        }
+    };
+    analytic::sphere_sphere_point(a, &pose_a, b, &pose_b, fallback, margin)
+}
+
 /// The manifold of a pair already in canonical order, in the world frame. Rotations are
 /// renormalised first: A's, and the relative rotation `b_in_a` (or B's own, when B's pose
 /// is used as it is).
@@ -443,19 +471,11 @@ fn contact_ordered(
         return analytic::sphere_cuboid(s, &pose_a, c, &pose_b, margin, out);
     }
     if let (Shape::Sphere(sa), Shape::Sphere(sb), Route::Fast(cache)) = (a, b, &mut route) {
-        // Closed form in the world frame. Coincident centres take world +Y from the
-        // pair's canonical A to its B (as the general path does), so both orders agree.
         **cache = PairCache::default();
-        let pose_a = Iso::new(pose_a.position, unit_a);
-        let pose_b = Iso::new(pose_b.position, pose_b.rotation.normalize());
-        let fallback = || {
-            if pair_order(b, &pose_b, a, &pose_a) == Ordering::Less {
-                -Vec3::Y
-            } else {
-                Vec3::Y
-            }
+        return match sphere_pair(sa, pose_a, sb, pose_b, margin) {
+            Some((normal, point)) => analytic::write_one_point(normal, point, out),
+            None => false,
         };
-        return analytic::sphere_sphere_world(sa, &pose_a, sb, &pose_b, fallback, margin, out);
     }
     if let (Shape::Sphere(s), Shape::Triangle(t), Route::Fast(cache)) = (a, b, &mut route) {
         // Closed form in the triangle's frame, like the box's.

@@ -37,7 +37,7 @@ pub use toi::{
 };
 
 pub(crate) use gjk::distance_in_a;
-pub(crate) use manifold::contact_cached_unchecked;
+pub(crate) use manifold::{contact_cached_unchecked, sphere_pair};
 pub(crate) use toi::time_of_impact_unchecked;
 
 use crate::error::{Error, Input};

@@ -54,6 +54,15 @@
 //! the manifold is valid, as before (dropping them when the boxes part changed how
 //! `jolt_pyramid` settles: its top box slid 437 mm instead of 15 mm).
 //!
+//! # Sphere pairs
+//!
+//! Two whole spheres are measured afresh every step and never reused: their closed form
+//! (`d = c_b − c_a`, normal `d/|d|`, separation `|d| − r_a − r_b`, one point) costs less
+//! than the reuse test's relative pose and drift bound, and is exact where a reuse
+//! measures the old surface points. Their boxes are exact, so boxes apart by more than
+//! the margin mean no point. The point is the one [`crate::collide::contact`] gives with
+//! the step's margin, to the bit; its impulse is carried over as a build's is.
+//!
 //! # Warm start
 //!
 //! A rebuilt manifold's points are matched to the old ones by feature-id key first
@@ -88,7 +97,7 @@
 
 use heapless::Vec as HVec;
 
-use crate::collide::{contact_cached_unchecked, Manifold, PairCache};
+use crate::collide::{contact_cached_unchecked, sphere_pair, Manifold, ManifoldPoint, PairCache};
 use crate::config::{reuse_slack, WorldConfig};
 use crate::dynamics::body::{Body, BodyKind, Material};
 use crate::dynamics::broad_phase::may_collide;
@@ -97,7 +106,7 @@ use crate::dynamics::mid_phase;
 use crate::dynamics::pool::Pool;
 use crate::math::lanes::{Pose4, V4};
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::Shape;
+use crate::shape::{Shape, Sphere};
 
 /// One persistent contact point with its accumulated impulses.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -602,6 +611,11 @@ fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
 /// build a new one and carry the impulses over (module docs).
 fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
     let reach = pair_reach(body_a, body_b, cfg);
+    if let (Shape::Sphere(a), Shape::Sphere(b)) = (&body_a.shape, &body_b.shape) {
+        let margin = cfg.speculative_margin + reach;
+        spheres(c, (a, b), body_a, body_b, cfg, margin);
+        return;
+    }
     if c.len == 0
         && !c.is_part()
         && apart(
@@ -912,20 +926,85 @@ fn fill_from_manifold(
         if !(src.separation.is_finite() && src.local_a.is_finite() && src.local_b.is_finite()) {
             return false;
         }
-        // The shape frame is the body frame, so the manifold's local anchors are ours.
-        let mid = (src.point_a + src.point_b) * 0.5;
-        *dst = ContactPoint {
-            id: src.id.key(),
-            local_a: src.local_a,
-            local_b: src.local_b,
-            separation: src.separation,
-            approach_speed: (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(normal),
-            ..ContactPoint::default()
-        };
+        *dst = contact_point(src, normal, body_a, body_b);
         c.len += 1;
         c.touching |= src.separation <= cfg.slop;
     }
     true
+}
+
+/// The contact point of manifold point `src` (normal `normal`), no impulse yet. The shape
+/// frame is the body frame, so the manifold's local anchors are the contact's.
+#[inline]
+fn contact_point(
+    src: &ManifoldPoint,
+    normal: Vec3,
+    body_a: &Body<'_>,
+    body_b: &Body<'_>,
+) -> ContactPoint {
+    let mid = (src.point_a + src.point_b) * 0.5;
+    ContactPoint {
+        id: src.id.key(),
+        local_a: src.local_a,
+        local_b: src.local_b,
+        separation: src.separation,
+        approach_speed: (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(normal),
+        ..ContactPoint::default()
+    }
+}
+
+/// Stage 5 for two whole spheres (module docs, "Sphere pairs"): the one point measured
+/// afresh in closed form, as a build would give it with the step's `margin`, its impulse
+/// carried over as a build's is. Its closing speed is formed only when a hit may be due
+/// (no point before, or touching only now), as a reuse's is.
+fn spheres(
+    c: &mut Contact,
+    (a, b): (&Sphere, &Sphere),
+    body_a: &Body<'_>,
+    body_b: &Body<'_>,
+    cfg: &WorldConfig,
+    margin: f32,
+) {
+    let (old_len, was_touching) = (usize::from(c.len), c.touching);
+    c.len = 0;
+    c.touching = false;
+    // Never reused: no manifold is kept to test against.
+    c.built_margin = -1.0;
+    c.sat_cache = PairCache::default();
+    // Sphere boxes are exact: boxes apart by more than the margin, no point.
+    let found = if apart(body_a, body_b, margin) {
+        None
+    } else {
+        sphere_pair(a, &body_a.pose, b, &body_b.pose, margin)
+    };
+    if let Some((normal, src)) = found {
+        let finite = normal.is_finite()
+            & src.separation.is_finite()
+            & src.local_a.is_finite()
+            & src.local_b.is_finite();
+        if finite {
+            let touching = src.separation <= cfg.slop;
+            let mut new = [if old_len == 0 || (touching && !was_touching) {
+                contact_point(&src, normal, body_a, body_b)
+            } else {
+                ContactPoint {
+                    id: src.id.key(),
+                    local_a: src.local_a,
+                    local_b: src.local_b,
+                    separation: src.separation,
+                    ..ContactPoint::default()
+                }
+            }];
+            let old = c.points.get(..old_len).unwrap_or(&[]);
+            carry_impulses(&mut new, old, cfg.slop);
+            c.points[0] = new[0];
+            c.normal = normal;
+            c.normal_local = body_a.pose.inverse_transform_vector(normal);
+            c.len = 1;
+            c.touching = touching;
+        }
+    }
+    keep_patch_in_plane(c);
 }
 
 /// Carry accumulated normal impulses from `old_points` (the same pair, last step) to the
@@ -933,7 +1012,11 @@ fn fill_from_manifold(
 /// `2 · slop` for points whose id matched nothing. Each old point is used at most once.
 fn warm_start(c: &mut Contact, old_points: &[ContactPoint], slop: f32) {
     let len = usize::from(c.len);
-    let new_points = c.points.get_mut(..len).unwrap_or(&mut []);
+    carry_impulses(c.points.get_mut(..len).unwrap_or(&mut []), old_points, slop);
+}
+
+/// [`warm_start`] for the points `new_points`.
+fn carry_impulses(new_points: &mut [ContactPoint], old_points: &[ContactPoint], slop: f32) {
     let mut used = [false; 4];
     let mut matched = [false; 4];
     // Pass 1: the same pair of features.
@@ -1215,6 +1298,89 @@ mod tests {
         assert!(
             apart_count > 800 && touching > 800,
             "{apart_count} apart, {touching} touching"
+        );
+    }
+
+    /// Two whole spheres are measured afresh every step (module docs, "Sphere pairs"):
+    /// whatever the contact held, the narrow phase leaves the point the general query
+    /// gives with the step's margin, to the bit, and the impulse of the old point (the
+    /// same features) carried over; apart, no point and no friction kept. Coincident
+    /// centres included, in both slot orders.
+    #[test]
+    fn sphere_pairs_are_measured_afresh_as_the_query_gives_them() {
+        use crate::collide::ContactId;
+        use crate::dynamics::body::BodyDesc;
+        use crate::rng::SplitMix64;
+        use crate::shape::FeatureId;
+        let cfg = WorldConfig::default();
+        let mut rng = SplitMix64::new(23);
+        let (mut hits, mut misses) = (0, 0);
+        for i in 0..3000 {
+            let body = |rng: &mut SplitMix64, p: Vec3| {
+                let mut d = BodyDesc::dynamic(Shape::sphere(rng.range(0.1, 0.6)).unwrap());
+                d.pose = Iso::new(p, rng.rotation());
+                d.linear_velocity = rng.unit_vector() * rng.range(0.0, 2.0);
+                d.angular_velocity = rng.unit_vector() * rng.range(0.0, 3.0);
+                Body::from_desc_anywhere(&d).unwrap()
+            };
+            let p = |rng: &mut SplitMix64| {
+                Vec3::new(
+                    rng.range(-0.7, 0.7),
+                    rng.range(-0.7, 0.7),
+                    rng.range(-0.7, 0.7),
+                )
+            };
+            let at_a = p(&mut rng);
+            let a = body(&mut rng, at_a);
+            let at = if i % 100 == 0 { at_a } else { p(&mut rng) };
+            let b = body(&mut rng, at);
+            // Whatever the contact held before: a reusable-looking manifold with the
+            // sphere pair's feature id, or another point, and a tangent impulse.
+            let old_id = ContactId {
+                a: FeatureId::vertex(0),
+                b: FeatureId::vertex(0),
+            };
+            let id = if i % 3 == 0 { 99 } else { old_id.key() };
+            let mut c = contact(&[point(id, Vec3::X, Vec3::Y, 2.5)]);
+            c.built_margin = 1.0;
+            c.friction_impulse = Vec3::new(0.3, -0.2, 0.1);
+            narrow_phase(&mut c, &a, &b, &cfg);
+            // The step's margin: speculative, grown by the pair's reach when swept.
+            let margin = cfg.speculative_margin + pair_reach(&a, &b, &cfg);
+            let want =
+                crate::collide::contact(&a.shape, &a.pose, &b.shape, &b.pose, margin).unwrap();
+            assert_eq!(c.built_margin, -1.0, "pair {i}: never reused");
+            let Some(m) = want else {
+                misses += 1;
+                assert_eq!((c.len, c.touching), (0, false), "pair {i}");
+                assert_eq!(c.friction_impulse, Vec3::ZERO, "pair {i}");
+                continue;
+            };
+            hits += 1;
+            assert_eq!((c.len, m.len), (1, 1), "pair {i}");
+            let (got, src) = (c.points[0], m.points[0]);
+            let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+            assert_eq!(bits(c.normal), bits(m.normal), "pair {i}");
+            assert_eq!(bits(got.local_a), bits(src.local_a), "pair {i}");
+            assert_eq!(bits(got.local_b), bits(src.local_b), "pair {i}");
+            assert_eq!(
+                got.separation.to_bits(),
+                src.separation.to_bits(),
+                "pair {i}"
+            );
+            assert_eq!(got.id, src.id.key(), "pair {i}");
+            assert_eq!(c.touching, src.separation <= cfg.slop, "pair {i}");
+            // The old point's impulse when the features match (or the anchors are near).
+            let near = (Vec3::X - got.local_a).length() <= 2.0 * cfg.slop
+                && (Vec3::Y - got.local_b).length() <= 2.0 * cfg.slop;
+            let carried = if id == old_id.key() || near { 2.5 } else { 0.0 };
+            assert_eq!(got.normal_impulse, carried, "pair {i}");
+            // The tangent impulse kept in the new tangent plane.
+            assert!(c.friction_impulse.dot(c.normal).abs() < 1e-6, "pair {i}");
+        }
+        assert!(
+            hits > 800 && misses > 800,
+            "{hits} touching, {misses} apart"
         );
     }
 
