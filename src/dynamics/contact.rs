@@ -935,7 +935,7 @@ fn fill_from_manifold(
 
 /// The contact point of manifold point `src` (normal `normal`), no impulse yet. The shape
 /// frame is the body frame, so the manifold's local anchors are the contact's.
-#[inline]
+#[inline(always)]
 fn contact_point(
     src: &ManifoldPoint,
     normal: Vec3,
