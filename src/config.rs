@@ -18,7 +18,7 @@ pub const LINEAR_SLOP: f32 = 0.005;
 /// Extra margin (m) a full narrow phase keeps beyond the one the step asks for, so a
 /// manifold can be reused while its pair drifts by up to this much (see
 /// `dynamics::contact`, "Manifold reuse"). One slop; pairs with a convex hull take
-/// [`HULL_REUSE_SLACK`] (see [`reuse_slack`]).
+/// [`HULL_REUSE_SLACK`], two spheres none (see [`reuse_slack`]).
 pub const REUSE_SLACK: f32 = LINEAR_SLOP;
 
 /// [`REUSE_SLACK`] of a pair with a convex hull (m): four slops.
@@ -31,9 +31,11 @@ pub const REUSE_SLACK: f32 = LINEAR_SLOP;
 /// box and sphere scenes even two slops cost more than they save (spheres +1.1 %).
 pub const HULL_REUSE_SLACK: f32 = 4.0 * LINEAR_SLOP;
 
-/// The reuse slack (m) of a pair of shapes: [`HULL_REUSE_SLACK`] when either is a
-/// [`Shape::Hull`], else [`REUSE_SLACK`]. A mesh, height-field or compound body's pairs are
-/// formed part by part, so it is the part's shape that counts there.
+/// The reuse slack (m) of a pair of shapes: 0 for two spheres (measured afresh every step
+/// in closed form, never reused: see `dynamics::contact`, "Sphere pairs"),
+/// [`HULL_REUSE_SLACK`] when either is a [`Shape::Hull`], else [`REUSE_SLACK`]. A mesh,
+/// height-field or compound body's pairs are formed part by part, so it is the part's
+/// shape that counts there.
 ///
 /// ```
 /// use carom::config::{reuse_slack, HULL_REUSE_SLACK, REUSE_SLACK};
@@ -41,15 +43,17 @@ pub const HULL_REUSE_SLACK: f32 = 4.0 * LINEAR_SLOP;
 ///
 /// let hull = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
 /// let ball = Shape::sphere(0.5).unwrap();
-/// assert_eq!(reuse_slack(&ball, &ball), REUSE_SLACK);
+/// let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+/// assert_eq!(reuse_slack(&ball, &ball), 0.0);
+/// assert_eq!(reuse_slack(&ball, &cube), REUSE_SLACK);
 /// assert_eq!(reuse_slack(&ball, &Shape::Hull(&hull)), HULL_REUSE_SLACK);
 /// ```
 #[inline]
 pub fn reuse_slack(a: &Shape<'_>, b: &Shape<'_>) -> f32 {
-    if matches!(a, Shape::Hull(_)) || matches!(b, Shape::Hull(_)) {
-        HULL_REUSE_SLACK
-    } else {
-        REUSE_SLACK
+    match (a, b) {
+        (Shape::Sphere(_), Shape::Sphere(_)) => 0.0,
+        (Shape::Hull(_), _) | (_, Shape::Hull(_)) => HULL_REUSE_SLACK,
+        _ => REUSE_SLACK,
     }
 }
 

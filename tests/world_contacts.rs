@@ -304,6 +304,59 @@ fn landing_ball_begins_once_and_ends_when_lifted() {
     assert_eq!(world.contact_count(), 0);
 }
 
+/// Two balls, one fixed, the other closing at 3 m/s (5 cm per step, no gravity): a sphere
+/// pair is measured afresh every step with the step's margin and no reuse slack
+/// (`reuse_slack` is 0 for it), so its point appears at the first step that starts
+/// within the speculative margin plus what the pair closes in a step (2 + 5 cm) and not
+/// one step earlier at 7.3 cm, which one slop of slack would reach. One hit then, at
+/// the full closing speed, then one begin.
+#[test]
+fn a_sphere_pair_appears_within_the_step_margin_and_reports_one_hit() {
+    let mut world: World<4, 8> = World::with_config(zero_gravity()).unwrap();
+    let fixed = world.add(BodyDesc::fixed(sphere(0.5))).unwrap();
+    // Gaps at the start of each step: 0.223, 0.173, 0.123, 0.073, 0.023.
+    let ball = world
+        .add(
+            BodyDesc::dynamic(sphere(0.5))
+                .position(Vec3::new(0.0, 1.223, 0.0))
+                .velocity(Vec3::new(0.0, -3.0, 0.0)),
+        )
+        .unwrap();
+    let cfg = *world.config();
+    let margin = cfg.speculative_margin + 3.0 * cfg.dt;
+    assert_eq!(reuse_slack(&sphere(0.5), &sphere(0.5)), 0.0);
+    // The step a margin with one slop of slack would find it, and the one this finds it.
+    let with_slack = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin + REUSE_SLACK);
+    let first = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin);
+    assert_eq!((with_slack, first), (Some(3), Some(4)));
+    let (mut hit_step, mut begin_step) = (None, None);
+    for k in 0..60 {
+        world.step();
+        if k == 3 {
+            assert_eq!(world.contact_count(), 0, "no point yet");
+        }
+        for e in world.events() {
+            match *e {
+                Event::Hit { a, b, speed, .. } => {
+                    assert_eq!((a, b, hit_step), (fixed, ball, None), "step {k}");
+                    assert!((speed - 3.0).abs() < 1e-5, "speed {speed}");
+                    hit_step = Some(k);
+                }
+                Event::ContactBegin { a, b } => {
+                    assert_eq!((a, b, begin_step), (fixed, ball, None), "step {k}");
+                    begin_step = Some(k);
+                }
+                other => panic!("step {k}: unexpected {other:?}"),
+            }
+        }
+    }
+    assert_eq!(hit_step, first, "the fifth step starts 2.3 cm apart");
+    assert!(begin_step.is_some_and(|b| b > 4), "begin at {begin_step:?}");
+    // It came to rest against the fixed ball, touching within the slop.
+    let y = world.body(ball).unwrap().position().y;
+    assert!((y - 1.0).abs() <= cfg.slop, "ball rests at y = {y}");
+}
+
 /// A ball at 3 m/s (5 cm per step, no gravity) whose contact first appears as a
 /// speculative one: the narrow phase keeps points within the speculative margin plus
 /// what the pair closes in a step plus the reuse slack (2 + 5 + 0.5 cm), so the manifold
