@@ -340,7 +340,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         // What rested on it (or under it) must notice: wake the bodies it touched.
         self.wake_touching(h.index);
         let b = self.body_mut(h)?;
-        b.pose = Iso::new(pose.position, pose.rotation.normalize());
+        b.place(Iso::new(pose.position, pose.rotation.normalize()));
         b.pose0 = b.pose;
         b.fat = b.shape.aabb(&b.pose);
         b.moved = true;

@@ -401,3 +401,78 @@ fn a_new_material_reaches_existing_contacts() {
         "slide {stopped} m, analytic {d} m"
     );
 }
+
+/// The centre of mass a body reports is `pose · c` (its shape's centre `c` of mass in the
+/// body frame) to the bit, after everything that moves a body: steps with contacts and
+/// projection, continuous collision of a fast body, a teleport, and a snapshot restored
+/// into another world. (The world keeps it with the pose rather than forming it on
+/// every read.)
+#[test]
+fn the_centre_of_mass_follows_every_pose_change() {
+    use carom::ConvexHull;
+    // An asymmetric hull: its centre of mass is off the body origin.
+    let hull = ConvexHull::new(&[
+        Vec3::ZERO,
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 0.5),
+        Vec3::new(0.3, 0.4, 0.2),
+    ])
+    .unwrap();
+    let hulls = [hull];
+    let shape = Shape::Hull(&hulls[0]);
+    let local = shape.mass_properties(1.0).unwrap().center;
+    assert!(local.length() > 0.3, "off-centre: {local:?}");
+    let mut w: World<'_, 8, 32> = World::new();
+    w.add(
+        BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
+            .position(Vec3::new(0.0, -0.5, 0.0)),
+    )
+    .unwrap();
+    let tumbling = w
+        .add(
+            BodyDesc::dynamic(shape)
+                .position(Vec3::new(0.0, 0.2, 0.0))
+                .angular_velocity(Vec3::new(3.0, 1.0, -2.0)),
+        )
+        .unwrap();
+    let fast = w
+        .add(
+            BodyDesc::dynamic(shape)
+                .position(Vec3::new(3.0, 4.0, 0.0))
+                .velocity(Vec3::new(0.0, -80.0, 0.0)),
+        )
+        .unwrap();
+    let check = |w: &World<'_, 8, 32>, when: &str| {
+        for h in [tumbling, fast] {
+            let b = w.body(h).unwrap();
+            let want = Iso::new(b.position(), b.rotation()).transform_point(local);
+            let got = b.center_of_mass();
+            let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+            assert_eq!(bits(got), bits(want), "{when}: {got:?} against {want:?}");
+        }
+    };
+    check(&w, "added");
+    for k in 0..90 {
+        w.step();
+        check(&w, &format!("step {k}"));
+    }
+    w.set_pose(
+        tumbling,
+        Iso::new(
+            Vec3::new(-1.0, 2.0, 0.5),
+            Quat::from_axis_angle(Vec3::Z, 0.7),
+        ),
+    )
+    .unwrap();
+    check(&w, "teleported");
+    let mut buf = vec![0u8; w.snapshot_len()];
+    let n = w.snapshot(&mut buf).unwrap();
+    let mut other: World<'_, 8, 32> = World::new();
+    other.restore_with_hulls(&buf[..n], &hulls).unwrap();
+    check(&other, "restored");
+    for k in 0..30 {
+        other.step();
+        check(&other, &format!("restored, step {k}"));
+    }
+}

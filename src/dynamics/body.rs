@@ -346,6 +346,9 @@ pub(crate) struct Body<'a> {
     pub pose: Iso,
     /// Centre of mass in the body frame.
     pub center_local: Vec3,
+    /// Centre of mass in the world (m), `pose.transform_point(center_local)`: kept by
+    /// [`Body::place`], which every change of `pose` goes through.
+    center_world: Vec3,
     /// Velocity of the centre of mass (m/s).
     pub linear_velocity: Vec3,
     /// Angular velocity (rad/s, world).
@@ -484,6 +487,7 @@ impl<'a> Body<'a> {
             kind: d.kind,
             pose,
             center_local,
+            center_world: pose.transform_point(center_local),
             linear_velocity: if still { Vec3::ZERO } else { d.linear_velocity },
             angular_velocity: if still {
                 Vec3::ZERO
@@ -566,7 +570,14 @@ impl<'a> Body<'a> {
     /// Centre of mass in the world (m).
     #[inline]
     pub fn world_center(&self) -> Vec3 {
-        self.pose.transform_point(self.center_local)
+        self.center_world
+    }
+
+    /// Put the body frame at `pose`, its centre of mass with it.
+    #[inline]
+    pub fn place(&mut self, pose: Iso) {
+        self.pose = pose;
+        self.center_world = pose.transform_point(self.center_local);
     }
 
     /// Refresh `R I⁻¹ Rᵀ` after the rotation changed.
@@ -596,7 +607,7 @@ impl<'a> Body<'a> {
 
     /// Move the body so its centre of mass is at `c` with rotation `q` (projection, CCD).
     pub fn set_center_pose(&mut self, c: Vec3, q: Quat) {
-        self.pose = Iso::new(c - q.rotate(self.center_local), q);
+        self.place(Iso::new(c - q.rotate(self.center_local), q));
         self.update_inertia();
     }
 }

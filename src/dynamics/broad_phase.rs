@@ -597,7 +597,11 @@ mod tests {
             for (_, b) in pool.iter_mut() {
                 b.moved = rng.next_u64().is_multiple_of(2);
                 if b.moved {
-                    b.pose.position += Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
+                    let shift = Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
+                    b.place(crate::math::Iso::new(
+                        b.pose.position + shift,
+                        b.pose.rotation,
+                    ));
                     b.fat = b.shape.aabb(&b.pose).expanded(rng.range(0.0, 0.2));
                 }
             }
@@ -771,6 +775,7 @@ mod tests {
             Body::from_desc(&BodyDesc::dynamic(shape).position(Vec3::new(1.0, 2.0, 3.0))).unwrap();
         // Pretend the centre of mass is off the origin, as for an asymmetric hull.
         b.center_local = Vec3::new(0.5, 0.0, 0.0);
+        b.place(b.pose);
         b.angular_velocity = Vec3::new(0.0, 0.0, 20.0);
         b.linear_velocity = Vec3::new(3.0, 0.0, 0.0);
         let mut cfg = WorldConfig::DEFAULT;

@@ -559,7 +559,7 @@ fn get_body<'a>(r: &mut Reader<'_>, refs: &ShapeLookup<'_, 'a>) -> R<Body<'a>> {
     ok(sleep_time >= 0.0)?;
     // The stored rotation, bit for bit, unless it is off unit length by more than the
     // step's own normalisation leaves (then normalised once: the result is kept next time).
-    b.pose = Iso::new(pose.position, settle_rotation(pose.rotation));
+    b.place(Iso::new(pose.position, settle_rotation(pose.rotation)));
     b.update_inertia();
     b.pose0 = Iso::new(pose0.position, settle_rotation(pose0.rotation));
     b.fat = fat;
