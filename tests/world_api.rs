@@ -11,13 +11,18 @@ fn ball() -> Shape<'static> {
     Shape::sphere(0.5).unwrap()
 }
 
-fn small_world() -> W {
-    let mut w = W::new();
+/// A 10 m square ground, its top face at y = 0.
+fn add_ground(w: &mut World<'_, 8, 32>) {
     w.add(
         BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
             .position(Vec3::new(0.0, -0.5, 0.0)),
     )
     .unwrap();
+}
+
+fn small_world() -> W {
+    let mut w = W::new();
+    add_ground(&mut w);
     w.add(BodyDesc::dynamic(ball()).position(Vec3::new(0.0, 1.0, 0.0)))
         .unwrap();
     w
@@ -424,11 +429,7 @@ fn the_centre_of_mass_follows_every_pose_change() {
     let local = shape.mass_properties(1.0).unwrap().center;
     assert!(local.length() > 0.3, "off-centre: {local:?}");
     let mut w: World<'_, 8, 32> = World::new();
-    w.add(
-        BodyDesc::fixed(Shape::cuboid(Vec3::new(5.0, 0.5, 5.0)).unwrap())
-            .position(Vec3::new(0.0, -0.5, 0.0)),
-    )
-    .unwrap();
+    add_ground(&mut w);
     let tumbling = w
         .add(
             BodyDesc::dynamic(shape)

@@ -304,6 +304,48 @@ fn landing_ball_begins_once_and_ends_when_lifted() {
     assert_eq!(world.contact_count(), 0);
 }
 
+/// A ball of radius 0.5 at height `y`, falling at 3 m/s.
+fn add_falling_ball(world: &mut World<4, 8>, y: f32) -> BodyHandle {
+    world
+        .add(
+            BodyDesc::dynamic(sphere(0.5))
+                .position(Vec3::new(0.0, y, 0.0))
+                .velocity(Vec3::new(0.0, -3.0, 0.0)),
+        )
+        .unwrap()
+}
+
+/// Step `world` 60 times and return the steps of the one `Hit` and the one
+/// `ContactBegin` between `a` and `b` (any other event, or a second one, fails), the hit
+/// at a closing speed of 3 m/s (`(v_a − v_b)·n = (0 − (−3))·n`: exact up to the f32
+/// velocity). `each` runs after every step with its index.
+fn one_hit_then_one_begin(
+    world: &mut World<4, 8>,
+    (a0, b0): (BodyHandle, BodyHandle),
+    mut each: impl FnMut(&World<4, 8>, usize),
+) -> (Option<usize>, Option<usize>) {
+    let (mut hit_step, mut begin_step) = (None, None);
+    for k in 0..60 {
+        world.step();
+        each(world, k);
+        for e in world.events() {
+            match *e {
+                Event::Hit { a, b, speed, .. } => {
+                    assert_eq!((a, b, hit_step), (a0, b0, None), "step {k}");
+                    assert!((speed - 3.0).abs() < 1e-5, "speed {speed}");
+                    hit_step = Some(k);
+                }
+                Event::ContactBegin { a, b } => {
+                    assert_eq!((a, b, begin_step), (a0, b0, None), "step {k}");
+                    begin_step = Some(k);
+                }
+                other => panic!("step {k}: unexpected {other:?}"),
+            }
+        }
+    }
+    (hit_step, begin_step)
+}
+
 /// Two balls, one fixed, the other closing at 3 m/s (5 cm per step, no gravity): a sphere
 /// pair is measured afresh every step with the step's margin and no reuse slack
 /// (`reuse_slack` is 0 for it), so its point appears at the first step that starts
@@ -315,13 +357,7 @@ fn a_sphere_pair_appears_within_the_step_margin_and_reports_one_hit() {
     let mut world: World<4, 8> = World::with_config(zero_gravity()).unwrap();
     let fixed = world.add(BodyDesc::fixed(sphere(0.5))).unwrap();
     // Gaps at the start of each step: 0.223, 0.173, 0.123, 0.073, 0.023.
-    let ball = world
-        .add(
-            BodyDesc::dynamic(sphere(0.5))
-                .position(Vec3::new(0.0, 1.223, 0.0))
-                .velocity(Vec3::new(0.0, -3.0, 0.0)),
-        )
-        .unwrap();
+    let ball = add_falling_ball(&mut world, 1.223);
     let cfg = *world.config();
     let margin = cfg.speculative_margin + 3.0 * cfg.dt;
     assert_eq!(reuse_slack(&sphere(0.5), &sphere(0.5)), 0.0);
@@ -329,27 +365,11 @@ fn a_sphere_pair_appears_within_the_step_margin_and_reports_one_hit() {
     let with_slack = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin + REUSE_SLACK);
     let first = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin);
     assert_eq!((with_slack, first), (Some(3), Some(4)));
-    let (mut hit_step, mut begin_step) = (None, None);
-    for k in 0..60 {
-        world.step();
+    let (hit_step, begin_step) = one_hit_then_one_begin(&mut world, (fixed, ball), |w, k| {
         if k == 3 {
-            assert_eq!(world.contact_count(), 0, "no point yet");
+            assert_eq!(w.contact_count(), 0, "no point yet");
         }
-        for e in world.events() {
-            match *e {
-                Event::Hit { a, b, speed, .. } => {
-                    assert_eq!((a, b, hit_step), (fixed, ball, None), "step {k}");
-                    assert!((speed - 3.0).abs() < 1e-5, "speed {speed}");
-                    hit_step = Some(k);
-                }
-                Event::ContactBegin { a, b } => {
-                    assert_eq!((a, b, begin_step), (fixed, ball, None), "step {k}");
-                    begin_step = Some(k);
-                }
-                other => panic!("step {k}: unexpected {other:?}"),
-            }
-        }
-    }
+    });
     assert_eq!(hit_step, first, "the fifth step starts 2.3 cm apart");
     assert!(begin_step.is_some_and(|b| b > 4), "begin at {begin_step:?}");
     // It came to rest against the fixed ball, touching within the slop.
@@ -373,33 +393,8 @@ fn hit_is_reported_when_a_speculative_contact_appears() {
         )
         .unwrap();
     // Gaps at the start of each step: 0.215, 0.165, 0.115, 0.065, 0.015 (speculative).
-    let ball = world
-        .add(
-            BodyDesc::dynamic(sphere(0.5))
-                .position(Vec3::new(0.0, 0.715, 0.0))
-                .velocity(Vec3::new(0.0, -3.0, 0.0)),
-        )
-        .unwrap();
-    let mut hit_step = None;
-    let mut begin_step = None;
-    for k in 0..60 {
-        world.step();
-        for e in world.events() {
-            match *e {
-                Event::Hit { a, b, speed, .. } => {
-                    assert_eq!((a, b, hit_step), (ground, ball, None), "step {k}");
-                    // (v_a − v_b)·n = (0 − (−3))·(+Y): exact up to the f32 velocity.
-                    assert!((speed - 3.0).abs() < 1e-5, "speed {speed}");
-                    hit_step = Some(k);
-                }
-                Event::ContactBegin { a, b } => {
-                    assert_eq!((a, b, begin_step), (ground, ball, None), "step {k}");
-                    begin_step = Some(k);
-                }
-                other => panic!("step {k}: unexpected {other:?}"),
-            }
-        }
-    }
+    let ball = add_falling_ball(&mut world, 0.715);
+    let (hit_step, begin_step) = one_hit_then_one_begin(&mut world, (ground, ball), |_, _| {});
     let cfg = *world.config();
     let reach = cfg.speculative_margin + 3.0 * cfg.dt + REUSE_SLACK;
     let first = (0..5).find(|k| 0.215 - 0.05 * *k as f32 <= reach);
