@@ -970,9 +970,9 @@ fn spheres(
     let (old_len, was_touching) = (usize::from(c.len), c.touching);
     c.len = 0;
     c.touching = false;
-    // Never reused: no manifold is kept to test against.
+    // Never reused: no manifold is kept to test against (and no separating-axis cache
+    // is ever read: it stays as the contact was created or restored, empty).
     c.built_margin = -1.0;
-    c.sat_cache = PairCache::default();
     // Sphere boxes are exact: boxes apart by more than the margin, no point.
     let found = if apart(body_a, body_b, margin) {
         None
