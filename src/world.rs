@@ -220,7 +220,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.pairs.clear();
         // The solver's gather: every pose is the step's start pose, forces are spent.
         for (_, b) in self.bodies.iter_mut() {
-            b.pose0 = b.pose;
+            b.pose0 = *b.pose();
             b.force = Vec3::ZERO;
             b.torque = Vec3::ZERO;
         }
@@ -341,8 +341,8 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.wake_touching(h.index);
         let b = self.body_mut(h)?;
         b.place(Iso::new(pose.position, pose.rotation.normalize()));
-        b.pose0 = b.pose;
-        b.fat = b.shape.aabb(&b.pose);
+        b.pose0 = *b.pose();
+        b.fat = b.shape.aabb(b.pose());
         b.moved = true;
         b.update_inertia();
         if b.kind != BodyKind::Static {
@@ -490,15 +490,15 @@ pub struct BodyRef<'w, 'a>(&'w Body<'a>);
 impl<'a> BodyRef<'_, 'a> {
     /// Pose of the body frame (m, unit quaternion).
     pub fn pose(&self) -> Iso {
-        self.0.pose
+        *self.0.pose()
     }
     /// Position of the body frame's origin (m).
     pub fn position(&self) -> Vec3 {
-        self.0.pose.position
+        self.0.pose().position
     }
     /// Rotation.
     pub fn rotation(&self) -> Quat {
-        self.0.pose.rotation
+        self.0.pose().rotation
     }
     /// Centre of mass (world, m).
     pub fn center_of_mass(&self) -> Vec3 {

@@ -342,8 +342,9 @@ pub(crate) struct Body<'a> {
     /// reference).
     pub bounding_radius: f32,
     pub kind: BodyKind,
-    /// Pose of the body frame (the shape's frame) in the world.
-    pub pose: Iso,
+    /// Pose of the body frame (the shape's frame) in the world: read through
+    /// [`Body::pose`], changed only through [`Body::place`] (which keeps `center_world`).
+    pose: Iso,
     /// Centre of mass in the body frame.
     pub center_local: Vec3,
     /// Centre of mass in the world (m), `pose.transform_point(center_local)`: kept by
@@ -571,6 +572,12 @@ impl<'a> Body<'a> {
     #[inline]
     pub fn world_center(&self) -> Vec3 {
         self.center_world
+    }
+
+    /// Pose of the body frame (the shape's frame) in the world.
+    #[inline(always)]
+    pub fn pose(&self) -> &Iso {
+        &self.pose
     }
 
     /// Put the body frame at `pose`, its centre of mass with it.

@@ -433,7 +433,7 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
 #[cfg(test)]
 pub(crate) fn body_bounds(body: &Body<'_>, cfg: &WorldConfig) -> Aabb {
     if body.kind == BodyKind::Static || !body.awake {
-        return body.shape.aabb(&body.pose);
+        return body.shape.aabb(body.pose());
     }
     let (motion, arc) = body_motion(body, cfg);
     let swept = movement_bounds(&body.shape, &motion, cfg.dt);
@@ -446,7 +446,7 @@ pub(crate) fn body_bounds(body: &Body<'_>, cfg: &WorldConfig) -> Aabb {
 fn body_motion(body: &Body<'_>, cfg: &WorldConfig) -> (Motion, Option<f32>) {
     let dt = cfg.dt;
     let center = body.world_center();
-    let origin_from_center = body.pose.position - center;
+    let origin_from_center = body.pose().position - center;
     let mut v = body.linear_velocity;
     if body.is_dynamic() {
         // What the step can reach: the integrator clamps to the speed limit.
@@ -456,7 +456,7 @@ fn body_motion(body: &Body<'_>, cfg: &WorldConfig) -> (Motion, Option<f32>) {
         );
     }
     let motion = Motion {
-        pose: body.pose,
+        pose: *body.pose(),
         linear: v + body.angular_velocity.cross(origin_from_center),
         angular: body.angular_velocity,
     };
@@ -599,10 +599,10 @@ mod tests {
                 if b.moved {
                     let shift = Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
                     b.place(crate::math::Iso::new(
-                        b.pose.position + shift,
-                        b.pose.rotation,
+                        b.pose().position + shift,
+                        b.pose().rotation,
                     ));
-                    b.fat = b.shape.aabb(&b.pose).expanded(rng.range(0.0, 0.2));
+                    b.fat = b.shape.aabb(b.pose()).expanded(rng.range(0.0, 0.2));
                 }
             }
             while pool.len() < N - 3 {
@@ -775,17 +775,17 @@ mod tests {
             Body::from_desc(&BodyDesc::dynamic(shape).position(Vec3::new(1.0, 2.0, 3.0))).unwrap();
         // Pretend the centre of mass is off the origin, as for an asymmetric hull.
         b.center_local = Vec3::new(0.5, 0.0, 0.0);
-        b.place(b.pose);
+        b.place(*b.pose());
         b.angular_velocity = Vec3::new(0.0, 0.0, 20.0);
         b.linear_velocity = Vec3::new(3.0, 0.0, 0.0);
         let mut cfg = WorldConfig::DEFAULT;
         cfg.gravity = Vec3::ZERO;
         let bounds = body_bounds(&b, &cfg);
         let c0 = b.world_center();
-        let mut end = b.pose;
+        let mut end = *b.pose();
         for k in 1..=16 {
             let t = cfg.dt * k as f32 / 16.0;
-            let q = b.pose.rotation.integrate(b.angular_velocity, t);
+            let q = b.pose().rotation.integrate(b.angular_velocity, t);
             let c = c0 + b.linear_velocity * t;
             end = crate::math::Iso::new(c - q.rotate(b.center_local), q);
             let aabb = b.shape.aabb(&end);
@@ -794,7 +794,7 @@ mod tests {
                 "k={k}: {bounds:?} does not contain {aabb:?}"
             );
         }
-        assert!(end.position.distance(b.pose.position) > 0.04);
+        assert!(end.position.distance(b.pose().position) > 0.04);
     }
 
     /// A full pair buffer keeps the pairs with the smallest keys, counts the rest, and

@@ -148,7 +148,7 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
         let path = body
             .shape
             .aabb(&body.pose0)
-            .union(&body.shape.aabb(&body.pose));
+            .union(&body.shape.aabb(body.pose()));
         let escaped = overflow.get(i).copied().unwrap_or(false) || !body.fat.contains(&path);
         let hit = if escaped {
             broad.overlapping(bodies, &path, &mut near);
@@ -177,14 +177,14 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
 fn motion_of(b: &Body<'_>, h: f32) -> Motion {
     if !b.awake || b.kind == BodyKind::Static {
         return Motion {
-            pose: b.pose,
+            pose: *b.pose(),
             linear: Vec3::ZERO,
             angular: Vec3::ZERO,
         };
     }
     Motion {
         pose: b.pose0,
-        linear: (b.pose.position - b.pose0.position) * (1.0 / h),
+        linear: (b.pose().position - b.pose0.position) * (1.0 / h),
         angular: b.angular_velocity,
     }
 }
@@ -194,7 +194,7 @@ fn fast_motion(b: &Body<'_>, cfg: &WorldConfig, h: f32) -> Option<Motion> {
     if !b.ccd || !is_active(b) {
         return None;
     }
-    let sweep = (b.pose.position - b.pose0.position).length()
+    let sweep = (b.pose().position - b.pose0.position).length()
         + b.angular_velocity.length() * h * b.bounding_radius;
     if sweep > cfg.ccd_motion_fraction * b.shape.min_extent() {
         Some(motion_of(b, h))
@@ -279,7 +279,7 @@ fn earliest_part_toi(
     h: f32,
     tolerance: f32,
 ) -> Toi {
-    let path = |b: &Body<'_>| b.shape.aabb(&b.pose0).union(&b.shape.aabb(&b.pose));
+    let path = |b: &Body<'_>| b.shape.aabb(&b.pose0).union(&b.shape.aabb(b.pose()));
     let (fast_path, other_path) = (path(fast), path(o));
     let mut best = Toi::Separated;
     let mut best_time = f32::INFINITY;

@@ -701,11 +701,11 @@ fn plan<'a>(
     let (shape_a, pose_a, shape_b, pose_b) = match &parts {
         Some(p) => (
             p.a,
-            placed(&body_a.pose, p.pose_a.as_ref()),
+            placed(body_a.pose(), p.pose_a.as_ref()),
             p.b,
-            placed(&body_b.pose, p.pose_b.as_ref()),
+            placed(body_b.pose(), p.pose_b.as_ref()),
         ),
-        None => (body_a.shape, body_a.pose, body_b.shape, body_b.pose),
+        None => (body_a.shape, *body_a.pose(), body_b.shape, *body_b.pose()),
     };
     Some(Plan {
         shape_a,
@@ -774,7 +774,7 @@ fn build(
     };
     if let (Some(m), Some(p)) = (manifold.as_mut(), &plan.parts) {
         let (a, b) = (&body_a.shape, &body_b.shape);
-        mid_phase::correct_mesh_contact(m, a, &body_a.pose, b, &body_b.pose, c.sub);
+        mid_phase::correct_mesh_contact(m, a, body_a.pose(), b, body_b.pose(), c.sub);
         // Anchors from the parts' frames into the bodies'.
         for q in m.points.iter_mut().take(usize::from(m.len)) {
             if let Some(local) = &p.pose_a {
@@ -850,7 +850,7 @@ fn reuse(
     cfg: &WorldConfig,
     b_in_a: Option<&Iso>,
 ) {
-    let n = body_a.pose.transform_vector(c.normal_local);
+    let n = body_a.pose().transform_vector(c.normal_local);
     c.normal = n;
     let was_touching = c.touching;
     c.touching = false;
@@ -873,8 +873,8 @@ fn reuse(
         }
         None => {
             for p in c.points.iter_mut().take(len) {
-                let p_a = body_a.pose.transform_point(p.local_a);
-                let p_b = body_b.pose.transform_point(p.local_b);
+                let p_a = body_a.pose().transform_point(p.local_a);
+                let p_b = body_b.pose().transform_point(p.local_b);
                 p.separation = (p_b - p_a).dot(n);
                 c.touching |= p.separation <= cfg.slop;
             }
@@ -885,8 +885,8 @@ fn reuse(
     if c.is_part() || (c.touching && !was_touching) {
         let (center_a, center_b) = (body_a.world_center(), body_b.world_center());
         for p in c.points.iter_mut().take(len) {
-            let p_a = body_a.pose.transform_point(p.local_a);
-            let p_b = body_b.pose.transform_point(p.local_b);
+            let p_a = body_a.pose().transform_point(p.local_a);
+            let p_b = body_b.pose().transform_point(p.local_b);
             let mid = (p_a + p_b) * 0.5;
             let v_a = body_a.linear_velocity + body_a.angular_velocity.cross(mid - center_a);
             let v_b = body_b.linear_velocity + body_b.angular_velocity.cross(mid - center_b);
@@ -923,34 +923,48 @@ fn fill_from_manifold(
         return false;
     }
     c.normal = normal;
-    c.normal_local = body_a.pose.inverse_transform_vector(normal);
+    c.normal_local = body_a.pose().inverse_transform_vector(normal);
     for (dst, src) in c.points.iter_mut().zip(m.points()) {
-        if !(src.separation.is_finite() && src.local_a.is_finite() && src.local_b.is_finite()) {
+        if !kept_finite(src) {
             return false;
         }
-        *dst = contact_point(src, normal, body_a, body_b);
+        *dst = contact_point(src, normal, body_a, body_b, true);
         c.len += 1;
         c.touching |= src.separation <= cfg.slop;
     }
     true
 }
 
-/// The contact point of manifold point `src` (normal `normal`), no impulse yet. The shape
-/// frame is the body frame, so the manifold's local anchors are the contact's.
+/// True when what a contact keeps of manifold point `src` is finite: its separation and
+/// both anchors (`&`, not `&&`: the usual answer is true, so every check runs anyway).
+#[inline(always)]
+fn kept_finite(src: &ManifoldPoint) -> bool {
+    src.separation.is_finite() & src.local_a.is_finite() & src.local_b.is_finite()
+}
+
+/// The contact point of manifold point `src` (normal `normal`), no impulse yet; its
+/// closing speed at the midpoint of the two surface points `with_speed`, else 0. The
+/// shape frame is the body frame, so the manifold's local anchors are the contact's.
 #[inline(always)]
 fn contact_point(
     src: &ManifoldPoint,
     normal: Vec3,
     body_a: &Body<'_>,
     body_b: &Body<'_>,
+    with_speed: bool,
 ) -> ContactPoint {
-    let mid = (src.point_a + src.point_b) * 0.5;
+    let approach_speed = if with_speed {
+        let mid = (src.point_a + src.point_b) * 0.5;
+        (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(normal)
+    } else {
+        0.0
+    };
     ContactPoint {
         id: src.id.key(),
         local_a: src.local_a,
         local_b: src.local_b,
         separation: src.separation,
-        approach_speed: (body_a.velocity_at(mid) - body_b.velocity_at(mid)).dot(normal),
+        approach_speed,
         ..ContactPoint::default()
     }
 }
@@ -977,31 +991,18 @@ fn spheres(
     let found = if apart(body_a, body_b, margin) {
         None
     } else {
-        sphere_pair(a, &body_a.pose, b, &body_b.pose, margin)
+        sphere_pair(a, body_a.pose(), b, body_b.pose(), margin)
     };
     if let Some((normal, src)) = found {
-        let finite = normal.is_finite()
-            & src.separation.is_finite()
-            & src.local_a.is_finite()
-            & src.local_b.is_finite();
-        if finite {
+        if normal.is_finite() & kept_finite(&src) {
             let touching = src.separation <= cfg.slop;
-            let mut new = [if old_len == 0 || (touching && !was_touching) {
-                contact_point(&src, normal, body_a, body_b)
-            } else {
-                ContactPoint {
-                    id: src.id.key(),
-                    local_a: src.local_a,
-                    local_b: src.local_b,
-                    separation: src.separation,
-                    ..ContactPoint::default()
-                }
-            }];
+            let hit_due = old_len == 0 || (touching && !was_touching);
+            let mut new = [contact_point(&src, normal, body_a, body_b, hit_due)];
             let old = c.points.get(..old_len).unwrap_or(&[]);
             carry_impulses(&mut new, old, cfg.slop);
             c.points[0] = new[0];
             c.normal = normal;
-            c.normal_local = body_a.pose.inverse_transform_vector(normal);
+            c.normal_local = body_a.pose().inverse_transform_vector(normal);
             c.len = 1;
             c.touching = touching;
         }
@@ -1143,8 +1144,8 @@ fn hit_events<const N: usize, const E: usize>(
         ) else {
             continue;
         };
-        let point_a = body_a.pose.transform_point(fastest.local_a);
-        let point_b = body_b.pose.transform_point(fastest.local_b);
+        let point_a = body_a.pose().transform_point(fastest.local_a);
+        let point_b = body_b.pose().transform_point(fastest.local_b);
         let event = Event::Hit {
             a,
             b,
@@ -1284,7 +1285,7 @@ mod tests {
             };
             let spread = if i % 2 == 0 { 0.6 } else { 1.2 };
             let (a, b) = (body(&mut rng, spread), body(&mut rng, spread));
-            let found = crate::collide::contact(&a.shape, &a.pose, &b.shape, &b.pose, margin)
+            let found = crate::collide::contact(&a.shape, a.pose(), &b.shape, b.pose(), margin)
                 .unwrap()
                 .is_some();
             touching += usize::from(found);
@@ -1350,7 +1351,7 @@ mod tests {
             // The step's margin: speculative, grown by the pair's reach when swept.
             let margin = cfg.speculative_margin + pair_reach(&a, &b, &cfg);
             let want =
-                crate::collide::contact(&a.shape, &a.pose, &b.shape, &b.pose, margin).unwrap();
+                crate::collide::contact(&a.shape, a.pose(), &b.shape, b.pose(), margin).unwrap();
             assert_eq!(c.built_margin, -1.0, "pair {i}: never reused");
             let Some(m) = want else {
                 misses += 1;

@@ -312,8 +312,8 @@ pub(crate) fn wake_touched_sleepers<const N: usize>(
     }
     let n = c.normal;
     let reached = c.points().iter().any(|p| {
-        let p_a = a.pose.transform_point(p.local_a);
-        let p_b = b.pose.transform_point(p.local_b);
+        let p_a = a.pose().transform_point(p.local_a);
+        let p_b = b.pose().transform_point(p.local_b);
         let approach = -(b.velocity_at(p_b) - a.velocity_at(p_a)).dot(n);
         closes_within(p.separation, approach, dt)
     });
@@ -478,8 +478,8 @@ pub(crate) fn prepare<const N: usize>(
     let mut largest = 0.0f32;
     let mut mids = [Vec3::ZERO; 4];
     for (dst, p) in k.points.iter_mut().zip(c.points()) {
-        let p_a = body_a.pose.transform_point(p.local_a);
-        let p_b = body_b.pose.transform_point(p.local_b);
+        let p_a = body_a.pose().transform_point(p.local_a);
+        let p_b = body_b.pose().transform_point(p.local_b);
         let r_a = p_a - center_a;
         let r_b = p_b - center_b;
         // The cores' points: a sphere's is its centre, so its spin does not carry the

@@ -169,7 +169,7 @@ fn query_parts(s: &Shape<'_>, region: &Aabb, f: impl FnMut(u32)) {
 /// How far a body's enlarged box reaches past its bounds (m): the largest margin on any
 /// side, never negative.
 fn fat_growth(body: &Body<'_>) -> f32 {
-    let tight = body.shape.aabb(&body.pose);
+    let tight = body.shape.aabb(body.pose());
     let lo = tight.min - body.fat.min;
     let hi = body.fat.max - tight.max;
     lo.max(hi).max_elem().max(0.0)
@@ -187,17 +187,17 @@ pub(crate) fn candidates(a: &Body<'_>, b: &Body<'_>, out: &mut HVec<u32, MAX_PAI
             fits = false;
         }
     };
-    let b_in_a_frame = b.fat.transformed(&a.pose.inverse());
+    let b_in_a_frame = b.fat.transformed(&a.pose().inverse());
     if b.shape.is_convex() {
         query_parts(&a.shape, &b_in_a_frame, |i| push(i, 0));
     } else if a.shape.is_convex() {
-        let a_in_b_frame = a.fat.transformed(&b.pose.inverse());
+        let a_in_b_frame = a.fat.transformed(&b.pose().inverse());
         query_parts(&b.shape, &a_in_b_frame, |j| push(0, j));
     } else {
         // Both have parts: each of A's that reaches B, grown like A's box, against B's.
         let grow = fat_growth(a);
-        let a_to_b = b.pose.inverse() * a.pose;
-        let a_in_b_frame = a.fat.transformed(&b.pose.inverse());
+        let a_to_b = b.pose().inverse() * *a.pose();
+        let a_in_b_frame = a.fat.transformed(&b.pose().inverse());
         query_parts(&a.shape, &b_in_a_frame, |i| {
             let region = part_bounds(&a.shape, i).transformed(&a_to_b).expanded(grow);
             if region.overlaps(&a_in_b_frame) {

@@ -91,12 +91,12 @@ fn project_constraint<const N: usize, const C: usize>(
         let r_a = if k.a == NONE {
             p.local_a
         } else {
-            a.pose.rotation.rotate(p.local_a)
+            a.pose().rotation.rotate(p.local_a)
         };
         let r_b = if k.b == NONE {
             p.local_b
         } else {
-            b.pose.rotation.rotate(p.local_b)
+            b.pose().rotation.rotate(p.local_b)
         };
         let separation = ((center_b + r_b) - (center_a + r_a)).dot(n) - k.radius_sum;
         let correction = scalar::clamp(
@@ -145,11 +145,11 @@ fn project_constraint<const N: usize, const C: usize>(
         }
         let j = n * push;
         if move_a {
-            let q = a.pose.rotation.integrate(-i_a.mul_vec(r_a.cross(j)), 1.0);
+            let q = a.pose().rotation.integrate(-i_a.mul_vec(r_a.cross(j)), 1.0);
             a.set_center_pose(center_a - j * m_a, q);
         }
         if move_b {
-            let q = b.pose.rotation.integrate(i_b.mul_vec(r_b.cross(j)), 1.0);
+            let q = b.pose().rotation.integrate(i_b.mul_vec(r_b.cross(j)), 1.0);
             b.set_center_pose(center_b + j * m_b, q);
         }
         if let Some(s) = solver.body_of_slot_mut(slot_a) {

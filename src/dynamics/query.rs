@@ -176,10 +176,10 @@ impl<'a, const B: usize, const C: usize, const E: usize> World<'a, B, C, E> {
             if len >= out.len() {
                 break;
             }
-            if !filter.sees(body) || !query_box.overlaps(&body.shape.aabb(&body.pose)) {
+            if !filter.sees(body) || !query_box.overlaps(&body.shape.aabb(body.pose())) {
                 continue;
             }
-            if !shapes_intersect(shape, &pose, &body.shape, &body.pose) {
+            if !shapes_intersect(shape, &pose, &body.shape, body.pose()) {
                 continue;
             }
             let (Some(dst), Some(handle)) = (out.get_mut(len), self.bodies.handle_at(slot)) else {
@@ -201,10 +201,10 @@ impl<'a, const B: usize, const C: usize, const E: usize> World<'a, B, C, E> {
         limit: f32,
         filter: QueryFilter,
     ) -> Option<RayCastHit> {
-        if !filter.sees(body) || !ray_meets_box(ray, &body.shape.aabb(&body.pose), limit) {
+        if !filter.sees(body) || !ray_meets_box(ray, &body.shape.aabb(body.pose()), limit) {
             return None;
         }
-        let hit = body.shape.cast_ray_unchecked(&body.pose, ray, limit)?;
+        let hit = body.shape.cast_ray_unchecked(body.pose(), ray, limit)?;
         Some(RayCastHit {
             body: self.bodies.handle_at(slot)?,
             t: hit.t,

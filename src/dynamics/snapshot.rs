@@ -452,7 +452,7 @@ fn put_body(s: &mut impl Sink, b: &Body<'_>) {
         BodyKind::Static => 1,
         BodyKind::Kinematic => 2,
     });
-    s.iso(&b.pose);
+    s.iso(b.pose());
     s.vec3(b.linear_velocity);
     s.vec3(b.angular_velocity);
     s.vec3(b.force);
@@ -1064,7 +1064,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
 
 /// The motion state of a body, hashed.
 fn hash_body_motion(f: &mut Fnv, b: &Body<'_>) {
-    f.iso(&b.pose);
+    f.iso(b.pose());
     f.vec3(b.linear_velocity);
     f.vec3(b.angular_velocity);
     f.u8(b.awake as u8);

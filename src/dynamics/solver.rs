@@ -440,7 +440,7 @@ fn gather<const N: usize, const C: usize>(
         *e = NONE;
     }
     for (slot, b) in bodies.iter_mut() {
-        b.pose0 = b.pose;
+        b.pose0 = *b.pose();
         if b.kind == BodyKind::Static || !b.awake {
             b.force = Vec3::ZERO;
             b.torque = Vec3::ZERO;
@@ -450,8 +450,8 @@ fn gather<const N: usize, const C: usize>(
         let mut sb = SolverBody {
             v: b.linear_velocity,
             w: b.angular_velocity,
-            q: b.pose.rotation,
-            rot: Mat3::from_quat(b.pose.rotation),
+            q: b.pose().rotation,
+            rot: Mat3::from_quat(b.pose().rotation),
             slot: slot as u32,
             ..SolverBody::ZERO
         };

@@ -168,8 +168,10 @@ fn gather_lane<const N: usize>(
     x.wb.set(l, wb);
     x.center_a.set(l, body_a.world_center());
     x.center_b.set(l, body_b.world_center());
-    x.pose_a.set(l, body_a.pose.rotation, body_a.pose.position);
-    x.pose_b.set(l, body_b.pose.rotation, body_b.pose.position);
+    x.pose_a
+        .set(l, body_a.pose().rotation, body_a.pose().position);
+    x.pose_b
+        .set(l, body_b.pose().rotation, body_b.pose().position);
     x.rho_a.set(l, body_a.shape.radius());
     x.rho_b.set(l, body_b.shape.radius());
     x.n.set(l, n);
