@@ -302,8 +302,9 @@ fn plan<const N: usize, const C: usize>(
 /// Reorder `scratch` (entries `(colour, contact)` in visit order, `count[c]` of colour
 /// `c`) into solve order: colours ascending, visit order within a colour, and each
 /// colour's last partial group of fewer than four moved to the overflow colour (solved
-/// lane by lane, packed four to a group: the store then needs at most one group beyond
-/// the contacts themselves). On return each entry's first component is its final colour.
+/// in runs of lanes without a shared body, packed four to a group: the store then needs
+/// at most one group beyond the contacts themselves). On return each entry's first
+/// component is its final colour.
 ///
 /// The order is that of a stable sort by final colour, built without sorting: every
 /// entry's destination is its colour's offset plus its place among the colour's
@@ -722,6 +723,74 @@ mod tests {
             world.step();
         }
         assert!(lanes > 200, "{lanes} lanes compared");
+    }
+
+    /// Overflow groups solved in runs of lanes without a shared body give the bits of the
+    /// same groups solved one lane at a time: the warm start and a soft and a relax pass
+    /// over a world's groups both ways, its bodies compared bit for bit, at steps where
+    /// some overflow group holds a run of several lanes and another has to split.
+    #[test]
+    fn overflow_runs_give_the_bits_of_one_lane_at_a_time() {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(compare_runs_and_lanes)
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
+    fn compare_runs_and_lanes() {
+        let mut world = prepare_world();
+        let (mut shared_runs, mut split_groups) = (0, 0);
+        for step in 0..90 {
+            let mut w = world.clone();
+            let cfg = w.config;
+            let h = cfg.substep();
+            gather(&mut w.solver, &mut w.bodies, &cfg, h);
+            plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+            let store = &mut w.solver.store;
+            for g in store.overflow_from..store.groups {
+                let group = store.group(g as usize).unwrap();
+                let active = (0..4).filter(|&l| group.contact(l) != NONE).count();
+                let (_, n) = wide::overflow_runs_for_tests(&group);
+                shared_runs += usize::from(n < active);
+                split_groups += usize::from(n > 1);
+            }
+            for use_bias in [true, false] {
+                let pass = wide::Pass {
+                    use_bias,
+                    moved: true,
+                    last: !use_bias,
+                };
+                let (mut store_a, mut bodies_a) = (store.clone(), w.solver.bodies.clone());
+                wide::warm_start(&mut store_a, &mut bodies_a);
+                wide::solve(&mut store_a, &mut bodies_a, &cfg, 1.0 / h, pass);
+                let (mut store_b, mut bodies_b) = (store.clone(), w.solver.bodies.clone());
+                wide::warm_start_and_solve_lane_by_lane(
+                    &mut store_b,
+                    &mut bodies_b,
+                    &cfg,
+                    1.0 / h,
+                    pass,
+                );
+                // Debug output tells -0.0 from 0.0 and shows NaN: a bitwise comparison.
+                assert_eq!(
+                    std::format!("{:?}", bodies_a),
+                    std::format!("{:?}", bodies_b),
+                    "step {step}"
+                );
+                assert_eq!(
+                    std::format!("{:?}", store_a),
+                    std::format!("{:?}", store_b),
+                    "step {step}"
+                );
+            }
+            world.step();
+        }
+        assert!(
+            shared_runs > 0 && split_groups > 0,
+            "{shared_runs} {split_groups}"
+        );
     }
 
     /// The counting placement gives the order of the sort it replaces: by final colour

@@ -11,7 +11,7 @@
 //! search from the top colour downwards (so they tend to be solved late: Gauss-Seidel
 //! gives the last word to the last row, and a wall must win over a ball knocked into
 //! it). A contact that fits no colour goes to the overflow colour, whose groups are
-//! solved one lane after the other. Kinematic bodies never move in the solve (their
+//! solved in lane order, a run of lanes that share no moving body at a time. Kinematic bodies never move in the solve (their
 //! velocity comes back unchanged), so they do not take colours.
 //!
 //! # Lanes
@@ -59,7 +59,8 @@ pub(crate) const DYNAMIC_COLORS: usize = 20;
 // Every colour is a bit of `SolverBody::colours`, and the dynamic ones are a part of all.
 const _: () = assert!(COLORS <= 32 && DYNAMIC_COLORS <= COLORS);
 
-/// The overflow colour: groups solved one lane at a time.
+/// The overflow colour: groups solved in lane order, in runs of lanes that share no
+/// moving body (`passes`).
 pub(crate) const OVERFLOW: u32 = COLORS as u32;
 
 /// Slots kept beside the `CONTACTS` main ones: one group, for the last partial overflow
@@ -195,7 +196,8 @@ pub(crate) struct WideStore<const C: usize> {
     extra: HVec<WideSlot, PAD_SLOTS>,
     /// Groups in use.
     pub groups: u32,
-    /// The first overflow group (groups from here on are solved lane by lane).
+    /// The first overflow group (groups from here on are solved in runs of lanes that
+    /// share no moving body).
     pub overflow_from: u32,
 }
 
@@ -633,23 +635,41 @@ impl Bodies4 {
     }
 }
 
-/// Which lanes to solve in one pass over a group: all active lanes of a coloured group,
-/// or one lane at a time for an overflow group (whose lanes may share bodies).
-fn passes(group: &Group<'_>, overflow: bool) -> ([[bool; 4]; 4], usize) {
+/// The passes over an overflow group (whose lanes may share bodies): its active lanes in
+/// lane order, in runs of consecutive lanes that share no solver body. The lanes of a run
+/// are independent (none reads a velocity another writes), so solving them at once is the
+/// same arithmetic, lane for lane, as solving them one after another: the same bits as
+/// one lane at a time, in fewer passes. Out of line: a step has a few overflow groups.
+#[inline(never)]
+fn overflow_runs(group: &Group<'_>) -> ([[bool; 4]; 4], usize) {
     let active = group.active();
-    if !overflow {
-        return ([active, [false; 4], [false; 4], [false; 4]], 1);
-    }
+    let (ia, ib) = (group.s0.idx, group.s1.idx);
     let mut out = [[false; 4]; 4];
-    let mut n = 0;
-    for (l, on) in active.iter().enumerate() {
-        if *on {
-            if let Some(p) = out.get_mut(n) {
-                if let Some(x) = p.get_mut(l) {
-                    *x = true;
-                }
-            }
+    let mut n = 0usize;
+    // The solver bodies the current run moves ([`NONE`]: a static or sleeping side).
+    let mut moved = [NONE; 8];
+    let mut used = 0usize;
+    for l in 0..4 {
+        if !active.get(l).copied().unwrap_or(false) {
+            continue;
+        }
+        let sides = [ia.get(l).copied(), ib.get(l).copied()].map(|i| i.unwrap_or(NONE));
+        let shares = moved
+            .iter()
+            .take(used)
+            .any(|m| sides.iter().any(|s| *s != NONE && s == m));
+        if n == 0 || shares {
             n += 1;
+            used = 0;
+        }
+        for side in sides {
+            if let Some(m) = moved.get_mut(used) {
+                *m = side;
+                used += 1;
+            }
+        }
+        if let Some(x) = out.get_mut(n - 1).and_then(|run| run.get_mut(l)) {
+            *x = true;
         }
     }
     (out, n)
@@ -662,18 +682,27 @@ pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut 
         let Some(mut group) = store.group(g) else {
             break;
         };
-        let (masks, n) = passes(&group, overflow);
-        let rows = group.point_rows();
-        for mask in masks.iter().take(n) {
-            // As in `solve`: full groups get their own copies of the kernel, with one,
-            // two or four point rows.
-            match (*mask == ALL_LANES, rows) {
-                (true, 1) => warm_start_group::<1>(&mut group, bodies, ALL_LANES),
-                (true, 2) => warm_start_group::<2>(&mut group, bodies, ALL_LANES),
-                (true, _) => warm_start_group::<4>(&mut group, bodies, ALL_LANES),
-                _ => warm_start_group::<4>(&mut group, bodies, *mask),
+        if overflow {
+            let (runs, n) = overflow_runs(&group);
+            for mask in runs.iter().take(n) {
+                warm_start_group::<4>(&mut group, bodies, *mask);
             }
+            continue;
         }
+        warm_start_coloured(&mut group, bodies);
+    }
+}
+
+/// Warm start a group of a colour (its lanes share no body): as in `solve`, full groups
+/// get their own copies of the kernel, with one, two or four point rows.
+#[inline(always)]
+fn warm_start_coloured(group: &mut Group<'_>, bodies: &mut [SolverBody]) {
+    let mask = group.active();
+    match (mask == ALL_LANES, group.point_rows()) {
+        (true, 1) => warm_start_group::<1>(group, bodies, ALL_LANES),
+        (true, 2) => warm_start_group::<2>(group, bodies, ALL_LANES),
+        (true, _) => warm_start_group::<4>(group, bodies, ALL_LANES),
+        _ => warm_start_group::<4>(group, bodies, mask),
     }
 }
 
@@ -798,29 +827,78 @@ pub(crate) fn solve<const C: usize>(
     inv_h: f32,
     pass: Pass,
 ) {
+    let a = (cfg, inv_h, pass);
     for g in 0..store.groups as usize {
         let overflow = g as u32 >= store.overflow_from;
         let Some(mut group) = store.group(g) else {
             break;
         };
-        let (masks, n) = passes(&group, overflow);
-        let rows = group.point_rows();
-        let bouncy = group.bouncy();
-        for mask in masks.iter().take(n) {
-            // A full group (every coloured group but the last) gets its own copy of the
-            // kernel, where the lane selects fold away, with one, two or four point rows
-            // (module docs), with or without the restitution records; the point loop
-            // unrolls in each.
-            let (g, bodies) = (&mut group, &mut *bodies);
+        if overflow {
+            let (runs, n) = overflow_runs(&group);
+            for mask in runs.iter().take(n) {
+                solve_group::<4, true>(&mut group, bodies, a, *mask);
+            }
+            continue;
+        }
+        solve_coloured(&mut group, bodies, a);
+    }
+}
+
+/// One pass over a group of a colour (its lanes share no body). A full group (every
+/// coloured group but the last) gets its own copy of the kernel, where the lane selects
+/// fold away, with one, two or four point rows (module docs), with or without the
+/// restitution records; the point loop unrolls in each.
+#[inline(always)]
+fn solve_coloured(g: &mut Group<'_>, bodies: &mut [SolverBody], a: (&WorldConfig, f32, Pass)) {
+    let mask = g.active();
+    match (mask == ALL_LANES, g.point_rows(), g.bouncy()) {
+        (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
+        (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
+        (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
+        (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
+        (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
+        (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
+        _ => solve_group::<4, true>(g, bodies, a, mask),
+    }
+}
+
+/// [`overflow_runs`] for the solver's tests.
+#[cfg(test)]
+pub(crate) fn overflow_runs_for_tests(group: &Group<'_>) -> ([[bool; 4]; 4], usize) {
+    overflow_runs(group)
+}
+
+/// [`warm_start`] then one [`solve`] pass as they were before overflow groups were solved
+/// in runs: every overflow lane on its own, in lane order (the tests' reference).
+#[cfg(test)]
+pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    cfg: &WorldConfig,
+    inv_h: f32,
+    pass: Pass,
+) {
+    for solving in [false, true] {
+        for g in 0..store.groups as usize {
+            let overflow = g as u32 >= store.overflow_from;
+            let mut group = store.group(g).unwrap();
             let a = (cfg, inv_h, pass);
-            match (*mask == ALL_LANES, rows, bouncy) {
-                (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
-                (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
-                (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
-                (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
-                (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
-                (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
-                _ => solve_group::<4, true>(g, bodies, a, *mask),
+            if !overflow {
+                if solving {
+                    solve_coloured(&mut group, bodies, a);
+                } else {
+                    warm_start_coloured(&mut group, bodies);
+                }
+                continue;
+            }
+            let active = group.active();
+            for l in (0..4).filter(|&l| active[l]) {
+                let mask: [bool; 4] = core::array::from_fn(|k| k == l);
+                if solving {
+                    solve_group::<4, true>(&mut group, bodies, a, mask);
+                } else {
+                    warm_start_group::<4>(&mut group, bodies, mask);
+                }
             }
         }
     }
@@ -1111,6 +1189,73 @@ mod tests {
         assert_eq!(stored(f32::NEG_INFINITY), 0.0);
         for x in [0.0, -0.0, 1.0e-40, 12.5, -7.25e29, MAX_STATE_FORCE] {
             assert_eq!(stored(x).to_bits(), x.to_bits());
+        }
+    }
+
+    /// An overflow group's runs: every active lane exactly once, in lane order, no two
+    /// lanes of a run sharing a solver body ([`NONE`] shares nothing), and a new run only
+    /// where the next lane shares a body with the run so far (brute force over random
+    /// groups).
+    #[test]
+    fn overflow_runs_are_the_longest_runs_without_a_shared_body() {
+        let mut rng = crate::rng::SplitMix64::new(41);
+        let mut store = WideStore::<8>::new();
+        for _ in 0..2000 {
+            assert!(store.reset(1));
+            let group = store.group(0).unwrap();
+            let pick = |rng: &mut crate::rng::SplitMix64| match rng.next_u64() % 6 {
+                0 => NONE,
+                k => k as u32,
+            };
+            for l in 0..4 {
+                group.s0.idx[l] = pick(&mut rng);
+                group.s1.idx[l] = pick(&mut rng);
+                group.s2.idx[l] = if rng.next_u64().is_multiple_of(5) {
+                    NONE
+                } else {
+                    l as u32
+                };
+            }
+            let (runs, n) = overflow_runs(&group);
+            let bodies = |l: usize| [group.s0.idx[l], group.s1.idx[l]];
+            let shares = |x: usize, y: usize| {
+                bodies(x)
+                    .iter()
+                    .any(|a| *a != NONE && bodies(y).contains(a))
+            };
+            let order: std::vec::Vec<(usize, usize)> = (0..n)
+                .flat_map(|r| (0..4).filter(move |&l| runs[r][l]).map(move |l| (r, l)))
+                .collect();
+            let active: std::vec::Vec<usize> =
+                (0..4).filter(|&l| group.contact(l) != NONE).collect();
+            assert_eq!(
+                order.iter().map(|e| e.1).collect::<std::vec::Vec<_>>(),
+                active
+            );
+            for (i, &(r, l)) in order.iter().enumerate() {
+                let earlier: std::vec::Vec<usize> = order[..i]
+                    .iter()
+                    .filter(|e| e.0 == r)
+                    .map(|e| e.1)
+                    .collect();
+                assert!(
+                    earlier.iter().all(|&k| !shares(k, l)),
+                    "lane {l} shares in run {r}"
+                );
+                let starts_run = i > 0 && order[i - 1].0 != r;
+                if starts_run {
+                    let previous: std::vec::Vec<usize> = order[..i]
+                        .iter()
+                        .filter(|e| e.0 == r - 1)
+                        .map(|e| e.1)
+                        .collect();
+                    assert!(
+                        previous.iter().any(|&k| shares(k, l)),
+                        "needless run at lane {l}"
+                    );
+                }
+            }
+            assert!(runs[n..].iter().all(|m| *m == [false; 4]));
         }
     }
 
