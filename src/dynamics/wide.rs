@@ -11,8 +11,9 @@
 //! search from the top colour downwards (so they tend to be solved late: Gauss-Seidel
 //! gives the last word to the last row, and a wall must win over a ball knocked into
 //! it). A contact that fits no colour goes to the overflow colour, whose groups are
-//! solved in lane order, a run of lanes that share no moving body at a time. Kinematic bodies never move in the solve (their
-//! velocity comes back unchanged), so they do not take colours.
+//! solved in lane order, a run of lanes that share no moving body at a time. Kinematic
+//! bodies never move in the solve (their velocity comes back unchanged), so they do not
+//! take colours.
 //!
 //! # Lanes
 //!
@@ -60,7 +61,7 @@ pub(crate) const DYNAMIC_COLORS: usize = 20;
 const _: () = assert!(COLORS <= 32 && DYNAMIC_COLORS <= COLORS);
 
 /// The overflow colour: groups solved in lane order, in runs of lanes that share no
-/// moving body (`passes`).
+/// moving body ([`overflow_runs`]).
 pub(crate) const OVERFLOW: u32 = COLORS as u32;
 
 /// Slots kept beside the `CONTACTS` main ones: one group, for the last partial overflow
