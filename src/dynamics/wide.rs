@@ -636,15 +636,25 @@ impl Bodies4 {
     }
 }
 
+/// The lanes solved in each pass over a group (up to four masks) and how many passes.
+type Passes = ([[bool; 4]; 4], usize);
+
+/// How an overflow group is cut into passes, from its active lanes and the solver indices
+/// of its bodies A and B ([`overflow_runs`]; the tests' lane-by-lane reference).
+type Runs = fn([bool; 4], [u32; 4], [u32; 4]) -> Passes;
+
 /// The passes over an overflow group (whose lanes may share bodies): its active lanes in
 /// lane order, in runs of consecutive lanes that share no solver body. The lanes of a run
 /// are independent (none reads a velocity another writes), so solving them at once is the
 /// same arithmetic, lane for lane, as solving them one after another: the same bits as
 /// one lane at a time, in fewer passes. Out of line: a step has a few overflow groups.
+///
+/// Takes the group's lanes (`active`, the solver indices of body A and body B) by value:
+/// a group passed by reference was kept in memory through the solve loop (its four slot
+/// references reloaded, one load stalled on the stores before it), and the loop ran 4 %
+/// slower for it (`spheres`, fewer instructions).
 #[inline(never)]
-fn overflow_runs(group: &Group<'_>) -> ([[bool; 4]; 4], usize) {
-    let active = group.active();
-    let (ia, ib) = (group.s0.idx, group.s1.idx);
+fn overflow_runs(active: [bool; 4], ia: [u32; 4], ib: [u32; 4]) -> Passes {
     let mut out = [[false; 4]; 4];
     let mut n = 0usize;
     // The solver bodies the current run moves ([`NONE`]: a static or sleeping side).
@@ -678,32 +688,33 @@ fn overflow_runs(group: &Group<'_>) -> ([[bool; 4]; 4], usize) {
 
 /// Apply the accumulated impulses of every group (start of each sub-step).
 pub(crate) fn warm_start<const C: usize>(store: &mut WideStore<C>, bodies: &mut [SolverBody]) {
+    warm_start_with(store, bodies, overflow_runs);
+}
+
+/// [`warm_start`] with the passes over an overflow group given by `runs`.
+#[inline(always)]
+fn warm_start_with<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    runs: Runs,
+) {
     for g in 0..store.groups as usize {
         let overflow = g as u32 >= store.overflow_from;
         let Some(mut group) = store.group(g) else {
             break;
         };
-        if overflow {
-            let (runs, n) = overflow_runs(&group);
-            for mask in runs.iter().take(n) {
-                warm_start_group::<4>(&mut group, bodies, *mask);
+        let (masks, n) = passes(&group, overflow, runs);
+        let rows = group.point_rows();
+        for mask in masks.iter().take(n) {
+            // As in `solve`: full groups of a colour get their own copies of the kernel,
+            // with one, two or four point rows.
+            match (!overflow && *mask == ALL_LANES, rows) {
+                (true, 1) => warm_start_group::<1>(&mut group, bodies, ALL_LANES),
+                (true, 2) => warm_start_group::<2>(&mut group, bodies, ALL_LANES),
+                (true, _) => warm_start_group::<4>(&mut group, bodies, ALL_LANES),
+                _ => warm_start_group::<4>(&mut group, bodies, *mask),
             }
-            continue;
         }
-        warm_start_coloured(&mut group, bodies);
-    }
-}
-
-/// Warm start a group of a colour (its lanes share no body): as in `solve`, full groups
-/// get their own copies of the kernel, with one, two or four point rows.
-#[inline(always)]
-fn warm_start_coloured(group: &mut Group<'_>, bodies: &mut [SolverBody]) {
-    let mask = group.active();
-    match (mask == ALL_LANES, group.point_rows()) {
-        (true, 1) => warm_start_group::<1>(group, bodies, ALL_LANES),
-        (true, 2) => warm_start_group::<2>(group, bodies, ALL_LANES),
-        (true, _) => warm_start_group::<4>(group, bodies, ALL_LANES),
-        _ => warm_start_group::<4>(group, bodies, mask),
     }
 }
 
@@ -828,49 +839,79 @@ pub(crate) fn solve<const C: usize>(
     inv_h: f32,
     pass: Pass,
 ) {
-    let a = (cfg, inv_h, pass);
+    solve_with(store, bodies, (cfg, inv_h, pass), overflow_runs);
+}
+
+/// [`solve`] with the passes over an overflow group given by `runs`.
+#[inline(always)]
+fn solve_with<const C: usize>(
+    store: &mut WideStore<C>,
+    bodies: &mut [SolverBody],
+    a: (&WorldConfig, f32, Pass),
+    runs: Runs,
+) {
     for g in 0..store.groups as usize {
         let overflow = g as u32 >= store.overflow_from;
         let Some(mut group) = store.group(g) else {
             break;
         };
-        if overflow {
-            let (runs, n) = overflow_runs(&group);
-            for mask in runs.iter().take(n) {
-                solve_group::<4, true>(&mut group, bodies, a, *mask);
+        let (masks, n) = passes(&group, overflow, runs);
+        let rows = group.point_rows();
+        let bouncy = group.bouncy();
+        for mask in masks.iter().take(n) {
+            // A full group of a colour (every coloured group but the last) gets its own
+            // copy of the kernel, where the lane selects fold away, with one, two or four
+            // point rows (module docs), with or without the restitution records; the
+            // point loop unrolls in each. Overflow runs take the masked kernel, whatever
+            // their lanes.
+            let (g, bodies) = (&mut group, &mut *bodies);
+            match (!overflow && *mask == ALL_LANES, rows, bouncy) {
+                (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
+                (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
+                (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
+                (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
+                (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
+                (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
+                _ => solve_group::<4, true>(g, bodies, a, *mask),
             }
-            continue;
         }
-        solve_coloured(&mut group, bodies, a);
     }
 }
 
-/// One pass over a group of a colour (its lanes share no body). A full group (every
-/// coloured group but the last) gets its own copy of the kernel, where the lane selects
-/// fold away, with one, two or four point rows (module docs), with or without the
-/// restitution records; the point loop unrolls in each.
+/// The passes over one group: all active lanes of a group of a colour, `runs` of an
+/// overflow group.
 #[inline(always)]
-fn solve_coloured(g: &mut Group<'_>, bodies: &mut [SolverBody], a: (&WorldConfig, f32, Pass)) {
-    let mask = g.active();
-    match (mask == ALL_LANES, g.point_rows(), g.bouncy()) {
-        (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
-        (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
-        (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
-        (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
-        (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
-        (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
-        _ => solve_group::<4, true>(g, bodies, a, mask),
+fn passes(group: &Group<'_>, overflow: bool, runs: Runs) -> Passes {
+    let active = group.active();
+    if !overflow {
+        return ([active, [false; 4], [false; 4], [false; 4]], 1);
     }
+    runs(active, group.s0.idx, group.s1.idx)
 }
 
 /// [`overflow_runs`] for the solver's tests.
 #[cfg(test)]
-pub(crate) fn overflow_runs_for_tests(group: &Group<'_>) -> ([[bool; 4]; 4], usize) {
-    overflow_runs(group)
+pub(crate) fn overflow_runs_for_tests(group: &Group<'_>) -> Passes {
+    overflow_runs(group.active(), group.s0.idx, group.s1.idx)
 }
 
-/// [`warm_start`] then one [`solve`] pass as they were before overflow groups were solved
-/// in runs: every overflow lane on its own, in lane order (the tests' reference).
+/// One lane at a time: the overflow passes before [`overflow_runs`] (the tests'
+/// reference).
+#[cfg(test)]
+fn one_lane_at_a_time(active: [bool; 4], _: [u32; 4], _: [u32; 4]) -> Passes {
+    let mut out = [[false; 4]; 4];
+    let mut n = 0;
+    for (l, on) in active.iter().enumerate() {
+        if *on {
+            out[n][l] = true;
+            n += 1;
+        }
+    }
+    (out, n)
+}
+
+/// [`warm_start`] then one [`solve`] pass with every overflow lane on its own, in lane
+/// order (the tests' reference).
 #[cfg(test)]
 pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
     store: &mut WideStore<C>,
@@ -879,30 +920,8 @@ pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
     inv_h: f32,
     pass: Pass,
 ) {
-    for solving in [false, true] {
-        for g in 0..store.groups as usize {
-            let overflow = g as u32 >= store.overflow_from;
-            let mut group = store.group(g).unwrap();
-            let a = (cfg, inv_h, pass);
-            if !overflow {
-                if solving {
-                    solve_coloured(&mut group, bodies, a);
-                } else {
-                    warm_start_coloured(&mut group, bodies);
-                }
-                continue;
-            }
-            let active = group.active();
-            for l in (0..4).filter(|&l| active[l]) {
-                let mask: [bool; 4] = core::array::from_fn(|k| k == l);
-                if solving {
-                    solve_group::<4, true>(&mut group, bodies, a, mask);
-                } else {
-                    warm_start_group::<4>(&mut group, bodies, mask);
-                }
-            }
-        }
-    }
+    warm_start_with(store, bodies, one_lane_at_a_time);
+    solve_with(store, bodies, (cfg, inv_h, pass), one_lane_at_a_time);
 }
 
 /// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`):
@@ -1217,7 +1236,7 @@ mod tests {
                     l as u32
                 };
             }
-            let (runs, n) = overflow_runs(&group);
+            let (runs, n) = overflow_runs_for_tests(&group);
             let bodies = |l: usize| [group.s0.idx[l], group.s1.idx[l]];
             let shares = |x: usize, y: usize| {
                 bodies(x)
