@@ -114,6 +114,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
                 points: 0,
                 ccd_sweeps: 0,
                 ccd_hits: 0,
+                ccd_queries: 0,
                 dropped_pairs: 0,
                 dropped_contacts: 0,
                 dropped_events: 0,

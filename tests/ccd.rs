@@ -4,6 +4,7 @@
 //! Public API only. Each tolerance says why it is what it is.
 
 use carom::scenes::{self, Scene};
+use carom::shape::HeightField;
 use carom::{BodyDesc, Material, Shape, Vec3, World, WorldConfig};
 
 const SLOP: f32 = carom::config::LINEAR_SLOP;
@@ -213,4 +214,52 @@ fn slow_bodies_are_not_swept() {
     for _ in 0..60 {
         assert_eq!(w.step().ccd_sweeps, 0);
     }
+}
+
+/// A fast box falling onto a height field is swept once against each triangle near its
+/// path per step: the step's time-of-impact queries are exactly the triangles that the
+/// field's own box query finds around the path (a brute-force count over the public
+/// query), not that count again for each of the pair's part contacts. Checked in the
+/// steps where the box is fast, has the field as a contact partner and is not moved back
+/// (its pose after the step is then the end of the path that was swept).
+#[test]
+fn a_fast_body_is_swept_once_against_each_triangle_near_its_path() {
+    // A ramp rising along x at 1 in 2 (8 × 8 cells of 0.5 m, 128 triangles): a cell's
+    // box reaches 0.25 m above its lower edge, so the path of a box falling beside the
+    // slope meets triangle boxes before the box touches the surface.
+    let n = 9u32;
+    let heights: Vec<f32> = (0..n * n).map(|k| 0.25 * (k % n) as f32).collect();
+    let field = HeightField::new(&heights, n, n, 0.5).unwrap();
+    let mut w: World<8, 512> = World::new();
+    let ground = w.add(BodyDesc::fixed(Shape::HeightField(&field))).unwrap();
+    let cube = Shape::cuboid(Vec3::splat(0.3)).unwrap();
+    // 12 m/s: 0.2 m a step, past a quarter of the box's 0.6 m (fast).
+    let b = w
+        .add(
+            BodyDesc::dynamic(cube)
+                .position(Vec3::new(2.0, 3.5, 2.0))
+                .velocity(Vec3::new(0.0, -12.0, 0.0)),
+        )
+        .unwrap();
+    let field_pose_inverse = w.body(ground).unwrap().pose().inverse();
+    let (mut checked, mut queries) = (0, 0);
+    for _ in 0..30 {
+        let before = w.body(b).unwrap().pose();
+        let r = w.step();
+        let after = w.body(b).unwrap().pose();
+        queries += r.ccd_queries;
+        if r.ccd_sweeps == 0 || r.ccd_hits > 0 || r.ccd_queries == 0 {
+            continue;
+        }
+        let path = cube.aabb(&before).union(&cube.aabb(&after));
+        let mut near = 0u32;
+        field.query_aabb(&path.transformed(&field_pose_inverse), |_| near += 1);
+        assert_eq!(r.ccd_queries, near, "step {}", w.step_count());
+        checked += 1;
+    }
+    eprintln!("swept-once check: {checked} steps, {queries} queries");
+    assert!(checked >= 1, "no step swept the box against the field");
+    // It landed on the field and stays above its lowest point.
+    let p = w.body(b).unwrap().position();
+    assert!(p.y > 0.3 - SLOP, "box at {p:?}");
 }

@@ -10,15 +10,17 @@
 //! exceeds `ccd_motion_fraction · min_extent`: it may have jumped over something thinner
 //! than itself. Fast bodies are taken in slot order. Each is swept from its pose at the
 //! start of the step (`pose0`) to its pose now with [`time_of_impact_unchecked`]
-//! against every other body it has a contact with (or, when a contact turned it out of
-//! its enlarged box this step, every body whose box its path touches, asked of the
-//! broad phase's tree and taken in slot order, so a ball knocked sideways by another
-//! still meets the wall it now heads for); the other body moves over
-//! the same interval from its own `pose0` to its pose now (a static body stays put, a
-//! fast body is swept too: fast against fast). Of the hits, the earliest is taken: the
-//! fast body goes back to its pose at that time (`Motion::pose_at`), and, when the other
-//! body is fast as well, so does the other. Velocities are kept: the next step's narrow
-//! phase finds the two within the speculative margin and the solver's speculative contact
+//! against every other body it has a contact with, each body once (a pair with a mesh
+//! or compound holds a record and a contact per part pair; its parts are swept once for
+//! the pair). When a contact turned it out of its enlarged box this step, it is swept
+//! instead against every body whose box its path touches, asked of the broad phase's
+//! tree and taken in slot order, so a ball knocked sideways by another still meets the
+//! wall it now heads for. The other body moves over the same interval from its own
+//! `pose0` to its pose now (a static body stays put, a fast body is swept too: fast
+//! against fast). Of the hits, the earliest is taken: the fast body goes back to its
+//! pose at that time (`Motion::pose_at`), and, when the other body is fast as well, so
+//! does the other. Velocities are kept: the next step's narrow phase finds the two
+//! within the speculative margin and the solver's speculative contact
 //! stops them before they touch.
 //!
 //! The sweep models the motion as the body origin moving at the constant velocity
@@ -153,10 +155,23 @@ pub(crate) fn sweep_fast_bodies<const N: usize, const P: usize>(
         let hit = if escaped {
             broad.overlapping(bodies, &path, &mut near);
             let all = near.iter().copied();
-            earliest_hit(&body, &motion, i as u32, bodies, all, cfg, h, tolerance)
+            let queries = &mut report.ccd_queries;
+            earliest_hit(
+                &body, &motion, i as u32, bodies, all, cfg, h, tolerance, queries,
+            )
         } else {
-            let listed = mine.iter().filter_map(partner);
-            earliest_hit(&body, &motion, i as u32, bodies, listed, cfg, h, tolerance)
+            // Each partner once: a pair with a mesh or compound holds a record and a
+            // contact per part pair, next to each other in `contacts` (sorted by pair,
+            // then part), so their entries follow each other in `mine` too.
+            let mut last = None;
+            let listed = mine
+                .iter()
+                .filter_map(partner)
+                .filter(|&o| last.replace(o) != Some(o));
+            let queries = &mut report.ccd_queries;
+            earliest_hit(
+                &body, &motion, i as u32, bodies, listed, cfg, h, tolerance, queries,
+            )
         };
         if let Some((time, other)) = hit {
             report.ccd_hits = report.ccd_hits.saturating_add(1);
@@ -210,7 +225,7 @@ fn core_reach(shape: &Shape<'_>) -> f32 {
 }
 
 /// The earliest hit of the fast body in slot `i` that counts (module docs): its time and
-/// the other body's slot.
+/// the other body's slot. Adds the time-of-impact queries it runs to `queries`.
 #[allow(clippy::too_many_arguments)]
 fn earliest_hit<const N: usize>(
     fast: &Body<'_>,
@@ -221,6 +236,7 @@ fn earliest_hit<const N: usize>(
     cfg: &WorldConfig,
     h: f32,
     tolerance: f32,
+    queries: &mut u32,
 ) -> Option<(f32, u32)> {
     if fast.sensor {
         return None;
@@ -238,9 +254,10 @@ fn earliest_hit<const N: usize>(
         }
         let other_motion = motion_of(o, h);
         let toi = if fast.shape.is_convex() && o.shape.is_convex() {
+            *queries = queries.saturating_add(1);
             time_of_impact_unchecked(&fast.shape, motion, &o.shape, &other_motion, h, tolerance)
         } else {
-            earliest_part_toi(fast, motion, o, &other_motion, h, tolerance)
+            earliest_part_toi(fast, motion, o, &other_motion, h, tolerance, queries)
         };
         let (time, normal) = match toi {
             Toi::Hit { time, normal, .. } => (time, Some(normal)),
@@ -270,7 +287,7 @@ fn earliest_hit<const N: usize>(
 /// compound's parts) whose bounds meet the other's path over the step. A part moves with
 /// its body's motion, from its pose in the body at the start, its origin at the velocity
 /// it has there (`v + ω × r`): exact for parts of bodies that do not turn, a first-order
-/// path for turning compounds.
+/// path for turning compounds. Adds the queries it runs to `queries`.
 fn earliest_part_toi(
     fast: &Body<'_>,
     motion: &Motion,
@@ -278,6 +295,7 @@ fn earliest_part_toi(
     other_motion: &Motion,
     h: f32,
     tolerance: f32,
+    queries: &mut u32,
 ) -> Toi {
     let path = |b: &Body<'_>| b.shape.aabb(&b.pose0).union(&b.shape.aabb(b.pose()));
     let (fast_path, other_path) = (path(fast), path(o));
@@ -287,6 +305,7 @@ fn earliest_part_toi(
         let ma = part_motion(motion, at_a.as_ref());
         mid_phase::parts_near(&o.shape, &other_motion.pose, &fast_path, |pb, at_b| {
             let mb = part_motion(other_motion, at_b.as_ref());
+            *queries = queries.saturating_add(1);
             let toi = time_of_impact_unchecked(&pa, &ma, &pb, &mb, h, tolerance);
             let time = match toi {
                 Toi::Hit { time, .. } | Toi::Unresolved { time } => time,
