@@ -519,9 +519,12 @@ fn update_group(
 ) {
     // The pair's sweep reach is the same for every part: taken once.
     let reach = pair_reach(a, b, cfg);
-    let reusable = group.iter().all(|c| {
-        plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius()))
-    });
+    let reusable = match TriangleFrame::of(a, b, cfg.speculative_margin + reach) {
+        Some(frame) => group.iter().all(|c| frame.reusable(c, a, b)),
+        None => group.iter().all(|c| {
+            plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius()))
+        }),
+    };
     if reusable {
         for c in group.iter_mut() {
             reuse(c, a, b, cfg, None);
@@ -742,6 +745,77 @@ impl Plan<'_> {
             &c.built_pose.inverse(),
             &self.b_in_a.inverse(),
             self.shape_a.bounding_radius(),
+        );
+        fits(scalar::min(drift, a_drift))
+    }
+}
+
+/// The reuse test of a group whose A is a mesh or height field and whose B is convex,
+/// without forming its triangles. Each of its part pairs is a triangle of A (in A's
+/// frame) and B itself, so B's pose in the part's frame is the bodies' relative pose,
+/// the same for every part, and the slack and B's radius are the same too: taken once
+/// for the group. A part's own triangle is formed only when B's drift does not fit and
+/// the triangle's radius is needed ([`Plan::reusable`]'s second bound). The answer is
+/// [`Plan::reusable`]'s, bit for bit, for every contact of the group.
+struct TriangleFrame {
+    /// Triangles of A: part key `1 + t` names triangle `t` (B has one part).
+    triangles: u32,
+    /// B's pose in A's frame now.
+    b_in_a: Iso,
+    /// This step's margin (m).
+    margin: f32,
+    /// The reuse slack of a triangle against B (m).
+    slack: f32,
+    /// B's bounding radius (m).
+    radius_b: f32,
+}
+
+impl TriangleFrame {
+    /// The frame of a pair whose A is a mesh or height field and whose B is convex, with
+    /// this step's `margin`; `None` for any other pair.
+    fn of(a: &Body<'_>, b: &Body<'_>, margin: f32) -> Option<TriangleFrame> {
+        let triangles = match a.shape {
+            Shape::Mesh(m) => m.triangle_count(),
+            Shape::HeightField(f) => f.triangle_count(),
+            _ => return None,
+        };
+        if !b.shape.is_convex() {
+            return None;
+        }
+        // Any triangle: the slack depends on the kinds of the shapes only.
+        let triangle = Shape::Triangle(crate::shape::Triangle {
+            vertices: [Vec3::ZERO; 3],
+        });
+        Some(TriangleFrame {
+            triangles,
+            b_in_a: a.pose().inv_mul(b.pose()),
+            margin,
+            slack: reuse_slack(&triangle, &b.shape),
+            radius_b: b.shape.bounding_radius(),
+        })
+    }
+
+    /// [`Plan::reusable`] of part contact `c` of bodies `a` and `b`, false where [`plan`]
+    /// finds no part pair (a key past A's triangles).
+    fn reusable(&self, c: &Contact, a: &Body<'_>, b: &Body<'_>) -> bool {
+        if c.sub == RECORD || c.sub.checked_sub(1).is_none_or(|t| t >= self.triangles) {
+            return false;
+        }
+        if c.built_margin < 0.0 {
+            return false;
+        }
+        let fits = |drift: f32| drift <= self.slack && self.margin + drift <= c.built_margin;
+        let drift = relative_drift(&c.built_pose, &self.b_in_a, self.radius_b);
+        if fits(drift) {
+            return true;
+        }
+        let Some(parts) = mid_phase::part_pair(&a.shape, &b.shape, c.sub) else {
+            return false;
+        };
+        let a_drift = relative_drift(
+            &c.built_pose.inverse(),
+            &self.b_in_a.inverse(),
+            parts.a.bounding_radius(),
         );
         fits(scalar::min(drift, a_drift))
     }
@@ -1255,6 +1329,78 @@ mod tests {
     /// The empty-pair test is sound: whenever two bodies' boxes are more than the margin
     /// apart, a full manifold query with that margin finds nothing. Random poses of
     /// spheres, capsules, cuboids and a hull (bounding-sphere box), half of them near.
+    /// A triangle group's shared reuse test gives [`Plan::reusable`]'s answer for every
+    /// contact: random relative poses of a box or a hull over a height field, contacts
+    /// built at poses moved by up to twice the slack (both sides of both bounds, the
+    /// triangle's own bound among them), margins on both sides of the built one, keys
+    /// past the last triangle and contacts never built.
+    #[test]
+    fn a_triangle_groups_reuse_test_is_the_plans() {
+        use crate::dynamics::body::BodyDesc;
+        use crate::rng::SplitMix64;
+        use crate::shape::{ConvexHull, HeightField};
+        let heights: [f32; 16] = core::array::from_fn(|k| 0.1 * (k % 5) as f32);
+        let field = HeightField::new(&heights, 4, 4, 0.5).unwrap();
+        let corners: [Vec3; 8] = core::array::from_fn(|i| {
+            Vec3::new((i & 1) as f32, (i >> 1 & 1) as f32, (i >> 2) as f32 * 0.5) * 0.3
+        });
+        let hull = ConvexHull::new(&corners).unwrap();
+        let shapes = [
+            Shape::cuboid(Vec3::new(0.3, 0.2, 0.25)).unwrap(),
+            Shape::hull(&hull),
+        ];
+        let cfg = WorldConfig::DEFAULT;
+        let mut rng = SplitMix64::new(11);
+        let (mut reused, mut refused, mut second_bound) = (0, 0, 0);
+        for i in 0..4000 {
+            let mut ground = BodyDesc::fixed(Shape::HeightField(&field));
+            ground.pose = Iso::new(Vec3::new(rng.range(-1.0, 1.0), 0.0, 0.0), rng.rotation());
+            let a = Body::from_desc_anywhere(&ground).unwrap();
+            let mut d = BodyDesc::dynamic(shapes[i % 2]);
+            d.pose = Iso::new(Vec3::new(0.7, 0.4, 0.7), rng.rotation());
+            let b = Body::from_desc_anywhere(&d).unwrap();
+            let reach = rng.range(0.0, 0.02);
+            let frame = TriangleFrame::of(&a, &b, cfg.speculative_margin + reach).unwrap();
+            // Built where B was, moved by up to two slacks (turned, shifted or both).
+            let now = a.pose().inv_mul(b.pose());
+            let step = rng.range(0.0, 2.0 * frame.slack);
+            let turn = rng.range(0.0, 2.0 * frame.slack);
+            let axis = rng.unit_vector();
+            let built = Iso::new(
+                now.position + rng.unit_vector() * step,
+                crate::math::Quat::from_axis_angle(axis, turn) * now.rotation,
+            );
+            let c = Contact {
+                a: 0,
+                b: 1,
+                sub: 1 + (rng.next_u64() % 20) as u32, // 18 triangles: some keys past them
+                built_pose: built,
+                built_margin: if i % 17 == 0 {
+                    -1.0
+                } else {
+                    frame.margin + rng.range(-0.5, 1.5) * frame.slack
+                },
+                ..Contact::default()
+            };
+            let by_plan = plan(&c, &a, &b, &cfg, reach)
+                .is_some_and(|p| p.reusable(&c, p.shape_b.bounding_radius()));
+            assert_eq!(frame.reusable(&c, &a, &b), by_plan, "contact {i}: {c:?}");
+            if by_plan {
+                reused += 1;
+                let drift = relative_drift(&c.built_pose, &frame.b_in_a, frame.radius_b);
+                second_bound += usize::from(drift > frame.slack);
+            } else {
+                refused += 1;
+            }
+        }
+        // Both answers are common, and some reuses hold only by the triangle's bound.
+        assert!(
+            reused > 400 && refused > 400,
+            "{reused} reused, {refused} refused"
+        );
+        assert!(second_bound > 0, "the triangle's own bound never decided");
+    }
+
     #[test]
     fn apart_boxes_mean_no_point_within_the_margin() {
         use crate::dynamics::body::BodyDesc;
