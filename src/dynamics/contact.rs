@@ -519,10 +519,12 @@ fn update_group(
 ) {
     // The pair's sweep reach is the same for every part: taken once.
     let reach = pair_reach(a, b, cfg);
-    let reusable = match TriangleFrame::of(a, b, cfg.speculative_margin + reach) {
+    let frame = TriangleFrame::of(a, b, cfg.speculative_margin + reach);
+    let reusable = match &frame {
         Some(frame) => group.iter().all(|c| frame.reusable(c, a, b)),
         None => group.iter().all(|c| {
-            plan(c, a, b, cfg, reach).is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius()))
+            plan(c, a, b, cfg, reach, None)
+                .is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius()))
         }),
     };
     if reusable {
@@ -540,9 +542,11 @@ fn update_group(
         }
         let _ = patches.push((c.normal, c.friction_impulse, c.twist_impulse, c.sticking));
     }
+    // A triangle group's parts share B's pose in the part's frame: taken once.
+    let shared = frame.as_ref().map(|f| &f.b_in_a);
     for c in group.iter_mut() {
         *tested = tested.saturating_add(1);
-        match plan(c, a, b, cfg, reach) {
+        match plan(c, a, b, cfg, reach, shared) {
             Some(p) => {
                 build(c, &p, a, b, cfg);
             }
@@ -635,7 +639,7 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         keep_patch_in_plane(c);
         return;
     }
-    let Some(plan) = plan(c, body_a, body_b, cfg, reach) else {
+    let Some(plan) = plan(c, body_a, body_b, cfg, reach, None) else {
         c.len = 0;
         c.touching = false;
         return;
@@ -687,7 +691,8 @@ fn pair_reach(body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) -> f32 {
 }
 
 /// The plan of contact `c`'s narrow phase, its margin grown by the pair's `reach`
-/// ([`pair_reach`]); `None` for a part key that names no part.
+/// ([`pair_reach`]); `None` for a part key that names no part. `b_in_a`: B's pose in A's
+/// frame when the caller has it (a triangle group's, [`TriangleFrame`]), else formed here.
 #[inline(always)]
 fn plan<'a>(
     c: &Contact,
@@ -695,6 +700,7 @@ fn plan<'a>(
     body_b: &Body<'a>,
     cfg: &WorldConfig,
     reach: f32,
+    b_in_a: Option<&Iso>,
 ) -> Option<Plan<'a>> {
     let parts = if c.is_part() {
         Some(mid_phase::part_pair(&body_a.shape, &body_b.shape, c.sub)?)
@@ -717,7 +723,7 @@ fn plan<'a>(
         pose_b,
         parts,
         margin: cfg.speculative_margin + reach,
-        b_in_a: pose_a.inv_mul(&pose_b),
+        b_in_a: b_in_a.copied().unwrap_or_else(|| pose_a.inv_mul(&pose_b)),
     })
 }
 
@@ -1382,7 +1388,7 @@ mod tests {
                 },
                 ..Contact::default()
             };
-            let by_plan = plan(&c, &a, &b, &cfg, reach)
+            let by_plan = plan(&c, &a, &b, &cfg, reach, None)
                 .is_some_and(|p| p.reusable(&c, p.shape_b.bounding_radius()));
             assert_eq!(frame.reusable(&c, &a, &b), by_plan, "contact {i}: {c:?}");
             if by_plan {
