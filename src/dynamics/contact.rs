@@ -731,29 +731,43 @@ impl Plan<'_> {
     /// True when the manifold `c` holds may be reused (module docs, "Manifold reuse");
     /// `radius_b` is `shape_b`'s bounding radius (m).
     fn reusable(&self, c: &Contact, radius_b: f32) -> bool {
-        if c.built_margin < 0.0 {
-            return false;
-        }
         let slack = reuse_slack(&self.shape_a, &self.shape_b);
-        let fits = |drift: f32| drift <= slack && self.margin + drift <= c.built_margin;
-        let drift = relative_drift(&c.built_pose, &self.b_in_a, radius_b);
-        if fits(drift) {
-            return true;
-        }
-        if self.parts.is_none() {
-            return false;
-        }
-        // A change in the distance of two points is bounded by either one's move relative
-        // to the other body: A's points in B's frame count too (a mesh triangle's radius
-        // is about the mesh's origin, far away). Either bound suffices, so this one is
-        // formed only when B's did not.
-        let a_drift = relative_drift(
-            &c.built_pose.inverse(),
-            &self.b_in_a.inverse(),
-            self.shape_a.bounding_radius(),
-        );
-        fits(scalar::min(drift, a_drift))
+        // A part contact's second bound: A's radius (a mesh triangle's is about the
+        // mesh's origin, far away).
+        let radius_a = || self.parts.is_some().then(|| self.shape_a.bounding_radius());
+        reuse_fits(c, &self.b_in_a, self.margin, slack, radius_b, radius_a)
     }
+}
+
+/// The reuse bounds of contact `c`'s manifold (module docs, "Manifold reuse"), with B's
+/// pose in A's frame now `b_in_a`, this step's `margin`, the pair's `slack` and B's
+/// radius `radius_b`: B's points moved at most `slack` in A's frame, and `margin` plus
+/// that drift is within the margin the manifold was built with. A change in the distance
+/// of two points is bounded by either one's move relative to the other body, so when
+/// B's drift does not fit, A's points in B's frame may: `radius_a` gives A's radius for
+/// that second bound (formed only then; `None`: no second bound, a pair of two bodies).
+#[inline(always)]
+fn reuse_fits(
+    c: &Contact,
+    b_in_a: &Iso,
+    margin: f32,
+    slack: f32,
+    radius_b: f32,
+    radius_a: impl FnOnce() -> Option<f32>,
+) -> bool {
+    if c.built_margin < 0.0 {
+        return false;
+    }
+    let fits = |drift: f32| drift <= slack && margin + drift <= c.built_margin;
+    let drift = relative_drift(&c.built_pose, b_in_a, radius_b);
+    if fits(drift) {
+        return true;
+    }
+    let Some(radius_a) = radius_a() else {
+        return false;
+    };
+    let a_drift = relative_drift(&c.built_pose.inverse(), &b_in_a.inverse(), radius_a);
+    fits(scalar::min(drift, a_drift))
 }
 
 /// The reuse test of a group whose A is a mesh or height field and whose B is convex,
@@ -807,23 +821,16 @@ impl TriangleFrame {
         if c.sub == RECORD || c.sub.checked_sub(1).is_none_or(|t| t >= self.triangles) {
             return false;
         }
-        if c.built_margin < 0.0 {
-            return false;
-        }
-        let fits = |drift: f32| drift <= self.slack && self.margin + drift <= c.built_margin;
-        let drift = relative_drift(&c.built_pose, &self.b_in_a, self.radius_b);
-        if fits(drift) {
-            return true;
-        }
-        let Some(parts) = mid_phase::part_pair(&a.shape, &b.shape, c.sub) else {
-            return false;
-        };
-        let a_drift = relative_drift(
-            &c.built_pose.inverse(),
-            &self.b_in_a.inverse(),
-            parts.a.bounding_radius(),
-        );
-        fits(scalar::min(drift, a_drift))
+        let radius_a =
+            || mid_phase::part_pair(&a.shape, &b.shape, c.sub).map(|p| p.a.bounding_radius());
+        reuse_fits(
+            c,
+            &self.b_in_a,
+            self.margin,
+            self.slack,
+            self.radius_b,
+            radius_a,
+        )
     }
 }
 
