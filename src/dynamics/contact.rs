@@ -1339,9 +1339,6 @@ mod tests {
         assert_eq!(got, [2.0, 3.0, 0.0, 0.0]);
     }
 
-    /// The empty-pair test is sound: whenever two bodies' boxes are more than the margin
-    /// apart, a full manifold query with that margin finds nothing. Random poses of
-    /// spheres, capsules, cuboids and a hull (bounding-sphere box), half of them near.
     /// A triangle group's shared reuse test gives [`Plan::reusable`]'s answer for every
     /// contact: random relative poses of a box or a hull over a height field, contacts
     /// built at poses moved by up to twice the slack (both sides of both bounds, the
@@ -1414,6 +1411,9 @@ mod tests {
         assert!(second_bound > 0, "the triangle's own bound never decided");
     }
 
+    /// The empty-pair test is sound: whenever two bodies' boxes are more than the margin
+    /// apart, a full manifold query with that margin finds nothing. Random poses of
+    /// spheres, capsules, cuboids and a hull (bounding-sphere box), half of them near.
     #[test]
     fn apart_boxes_mean_no_point_within_the_margin() {
         use crate::dynamics::body::BodyDesc;

@@ -84,9 +84,9 @@ pub struct StepReport {
     pub ccd_sweeps: u32,
     /// Sweeps that found a time of impact and moved a body back.
     pub ccd_hits: u32,
-    /// Time-of-impact queries the sweeps ran: one per other body a fast body is swept
-    /// against, or, against a mesh, height field or compound, one per part pair near
-    /// the fast body's path (each part pair once per step).
+    /// Time-of-impact queries the sweeps ran: one per body a fast body is swept against,
+    /// or, against a mesh, height field or compound, one per part pair near the fast
+    /// body's path (each part pair at most once per fast body and step).
     pub ccd_queries: u32,
     /// New candidate pairs that did not fit in the step's pair buffer (`CONTACTS` long):
     /// those with the lowest `(lower slot, higher slot)` keys are kept, whatever order the
