@@ -432,7 +432,7 @@ pub(crate) fn support(pa: &Proxy, pb: &Proxy, dir: Vec3) -> SimplexVertex {
 }
 
 /// Up to four vertices with the barycentric coordinates of the point closest to the
-/// origin (valid after [`Simplex::reduce`]).
+/// origin (valid after [`Simplex::reduce_into`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) struct Simplex {
     /// The vertices; the first `count` are used.
@@ -479,7 +479,7 @@ impl Simplex {
         self.used().iter().any(|u| u.same_as(v))
     }
 
-    /// The closest point `v` (valid after [`Simplex::reduce`]).
+    /// The closest point `v` (valid after [`Simplex::reduce_into`]).
     pub fn closest(&self) -> Vec3 {
         self.point
     }
@@ -504,12 +504,28 @@ impl Simplex {
         m
     }
 
+    /// Remove the last vertex (pushed by [`Simplex::push`]), its slot cleared as an unused
+    /// slot is; nothing happens to an empty simplex. Lambdas and the closest point are
+    /// left as they were.
+    fn pop(&mut self) {
+        if let Some(count) = self.count.checked_sub(1) {
+            if let Some(slot) = self.vertices.get_mut(count) {
+                *slot = SimplexVertex::default();
+            }
+            self.count = count;
+        }
+    }
+
     /// Signed volumes: the smallest sub-simplex holding the point closest to the origin,
-    /// with its barycentric coordinates. Vertices keep their order.
-    pub fn reduce(&self) -> Simplex {
+    /// with its barycentric coordinates, written into `out` (whatever it held before).
+    /// Vertices keep their order.
+    pub fn reduce_into(&self, out: &mut Simplex) {
         let [p0, p1, p2, p3] = self.vertices.map(|v| v.w);
         let (lambdas, point) = match self.count {
-            0 => return *self,
+            0 => {
+                *out = *self;
+                return;
+            }
             1 => ([1.0, 0.0, 0.0, 0.0], p0),
             2 => {
                 let ([l0, l1], p) = s1d(p0, p1);
@@ -521,7 +537,7 @@ impl Simplex {
             }
             _ => s3d(p0, p1, p2, p3),
         };
-        let mut out = Simplex::default();
+        *out = Simplex::default();
         for (v, &l) in self.used().iter().zip(lambdas.iter()) {
             if l > 0.0 {
                 if let Some(slot) = out.lambdas.get_mut(out.count) {
@@ -532,10 +548,10 @@ impl Simplex {
         }
         if out.count == 0 {
             // Only reachable with NaN coordinates: keep the first vertex.
-            return Simplex::single(self.vertices[0]);
+            *out = Simplex::single(self.vertices[0]);
+            return;
         }
         out.point = point;
-        out
     }
 }
 
@@ -909,7 +925,11 @@ pub(crate) fn gjk_cores(
     // would never fire: GJK would report the cores apart by 1e-21 m with a normal that is
     // rounding noise (or the fallback), not a direction of D's normal cone.
     let mut size2 = start.max_w_squared();
-    let mut simplex = start.reduce();
+    // Two simplex buffers, swapped by reference: the grown simplex is built in place in
+    // `simplex` and reduced into `next`; no simplex is copied in the loop.
+    let mut buffers = (Simplex::default(), Simplex::default());
+    start.reduce_into(&mut buffers.0);
+    let (mut simplex, mut next) = (&mut buffers.0, &mut buffers.1);
     let mut v = simplex.closest();
     let mut status = GjkStatus::IterationLimit;
     let mut iterations = 0;
@@ -959,9 +979,9 @@ pub(crate) fn gjk_cores(
             stop = Some(apart());
             break;
         }
-        let mut grown = simplex;
-        grown.push(w);
-        let next = grown.reduce();
+        // The grown simplex, `simplex` with `w` pushed (popped again if it is not taken).
+        let pushed = simplex.push(w);
+        simplex.reduce_into(next);
         let v_next = next.closest();
         let vv_next = v_next.length_squared();
         if next.count < 4 {
@@ -974,23 +994,27 @@ pub(crate) fn gjk_cores(
             // (within GJK_ROUNDING) is still taken: the point moves to the right feature.
             // A few such steps in a row mean f32 cannot tell the candidates apart: stop.
             let kept = next.used().iter().any(|u| u.same_as(&w));
-            let rounding = GJK_ROUNDING * scalar::sqrt(vv * grown.max_w_squared());
+            let rounding = GJK_ROUNDING * scalar::sqrt(vv * simplex.max_w_squared());
             let progress = kept && vv_next <= vv + rounding;
             if !progress {
+                if pushed {
+                    simplex.pop();
+                }
                 stop = Some(apart());
                 break;
             }
             plateau = if vv_next < vv { 0 } else { plateau + 1 };
             if plateau > GJK_MAX_PLATEAU {
-                simplex = next;
+                core::mem::swap(&mut simplex, &mut next);
                 v = v_next;
                 stop = Some(apart());
                 break;
             }
         }
-        simplex = next;
+        core::mem::swap(&mut simplex, &mut next);
         v = v_next;
     }
+    let mut simplex = *simplex;
     match stop {
         Some(Stop::Separated) => status = GjkStatus::Separated,
         Some(Stop::Overlapping) => status = GjkStatus::Overlapping,

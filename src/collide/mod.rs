@@ -172,6 +172,16 @@ pub(crate) struct Proxy<'s, 'a> {
     identity: bool,
 }
 
+/// [`Shape::core_support`] with a hull's scan inlined here: GJK and EPA take a support
+/// point per iteration, and the whole shape match is too large to inline.
+#[inline(always)]
+fn core_support(shape: &Shape<'_>, dir: Vec3) -> (Vec3, u32) {
+    match shape {
+        Shape::Hull(h) => h.core_support(dir),
+        _ => shape.core_support(dir),
+    }
+}
+
 impl<'s, 'a> Proxy<'s, 'a> {
     /// `shape` at `pose` (query frame).
     #[inline]
@@ -210,11 +220,9 @@ impl<'s, 'a> Proxy<'s, 'a> {
     #[inline]
     pub fn support(&self, dir: crate::math::Vec3) -> (crate::math::Vec3, u32) {
         if self.identity {
-            return self.shape.core_support(dir);
+            return core_support(self.shape, dir);
         }
-        let (p, i) = self
-            .shape
-            .core_support(self.rotation.transpose_mul_vec(dir));
+        let (p, i) = core_support(self.shape, self.rotation.transpose_mul_vec(dir));
         (self.rotation.mul_vec(p) + self.pose.position, i)
     }
 

@@ -102,6 +102,18 @@ impl F4 {
         b.blend([x0 == y0, x1 == y1, x2 == y2, x3 == y3], a)
     }
 
+    /// Lane-wise `self == o` as the bits of a 4-bit number, lane `k` in bit `k` (0 where
+    /// either is NaN).
+    #[inline]
+    pub fn eq_bits(self, o: F4) -> u32 {
+        let [x0, x1, x2, x3] = self.0;
+        let [y0, y1, y2, y3] = o.0;
+        u32::from(x0 == y0)
+            | (u32::from(x1 == y1) << 1)
+            | (u32::from(x2 == y2) << 2)
+            | (u32::from(x3 == y3) << 3)
+    }
+
     /// Lane-wise `if mask { a } else { self }`.
     #[inline]
     pub fn select_where(self, mask: [bool; 4], a: F4) -> F4 {

@@ -375,44 +375,36 @@ impl ConvexHull {
     }
 
     /// The vertex with the largest `v · dir`, the lowest index on ties (vertex 0 when no
-    /// product is above `−∞`, e.g. all NaN). Four running maxima over the vertices
-    /// `k, k + 4, k + 8, ...` are merged at the end: the same answer as one scan in index
-    /// order, with four independent compare chains instead of one long one (GJK waits on
-    /// every support point).
+    /// product is above `−∞`, e.g. all NaN): the same answer as one scan in index order.
+    /// Two passes over [`ConvexHull::vertex_lanes`]: four running maxima (lane `k` over
+    /// the vertices `k, k + 4, ...`; NaN products never taken) give the largest product
+    /// `m`; then the first group holding a product equal to `m`, recomputed to the bit,
+    /// gives the lowest index. Padding lanes repeat vertex 0, so they match `m` only after
+    /// vertex 0 itself has. No index is carried through the first pass, whose four
+    /// compare chains are independent (GJK waits on every support point).
+    #[inline]
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
-        // Lane `k` runs over the vertices `k, k + 4, ...`, four products at a time
-        // (`x dₓ + y d_y + z d_z`, as `Vec3::dot`), and takes a product only when it is
-        // larger (so the lowest index on ties, and never a NaN). A last partial group's
-        // padding lanes repeat vertex 0, whose lane 0 always holds at least its product:
-        // a padding lane never wins the merge.
         let d = V4::splat(dir);
+        let groups = self.vertex_lanes.get(..self.vertex_groups()).unwrap_or(&[]);
         let mut best = F4::splat(f32::NEG_INFINITY);
-        let mut index = [u32::MAX; 4];
-        let mut base = 0u32;
-        for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
+        for group in groups {
             let p = group.dot(&d);
-            // A bit mask per lane, so the index select is a blend, not a branch.
-            let wins: [u32; 4] =
-                core::array::from_fn(|k| u32::from(p.lane(k) > best.lane(k)).wrapping_neg());
-            index = core::array::from_fn(|k| {
-                let (w, old) = (wins[k & 3], index[k & 3]);
-                ((base + k as u32) & w) | (old & !w)
-            });
             best = p.gt_select(best, p, best);
-            base += 4;
         }
-        // Merge: the largest product, the lowest index among equal ones.
-        let mut pick = (f32::NEG_INFINITY, u32::MAX);
-        for (k, &i) in index.iter().enumerate() {
-            let p = best.lane(k);
-            let better =
-                i != u32::MAX && (pick.1 == u32::MAX || p > pick.0 || (p == pick.0 && i < pick.1));
-            if better {
-                pick = (p, i);
+        let [b0, b1, b2, b3] = best.0;
+        let take = |m: f32, x: f32| if x > m { x } else { m };
+        let m = take(take(b0, b1), take(b2, b3));
+        if m > f32::NEG_INFINITY {
+            let m4 = F4::splat(m);
+            for (g, group) in groups.iter().enumerate() {
+                let hits = group.dot(&d).eq_bits(m4);
+                if hits != 0 {
+                    let i = 4 * g as u32 + hits.trailing_zeros();
+                    return (self.core_vertex(i), i);
+                }
             }
         }
-        let i = if pick.1 == u32::MAX { 0 } else { pick.1 };
-        (self.core_vertex(i), i)
+        (self.core_vertex(0), 0)
     }
 
     /// The groups of [`ConvexHull::vertex_lanes`] in use: the vertices' count over four,
@@ -1947,6 +1939,11 @@ mod tests {
             -Vec3::X,
             Vec3::new(1.0, 1.0, 0.0),
             Vec3::ZERO,
+            // Infinite products (+∞ ties, −∞ everywhere) and NaN ones (0 · ∞) beside
+            // finite ones.
+            Vec3::new(f32::INFINITY, 0.0, 0.0),
+            Vec3::new(f32::NEG_INFINITY, 1.0, 0.0),
+            Vec3::new(f32::INFINITY, f32::INFINITY, 0.0),
         ];
         for h in &hulls {
             for dir in axes
