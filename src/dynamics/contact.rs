@@ -345,19 +345,23 @@ pub(crate) fn insert_pairs<const N: usize, const C: usize>(
             (Some(_), None) => true,
             (None, _) => false,
         };
-        let next = if take_new {
+        if take_new {
             new_at -= 1;
             let Some(&(a, b)) = pair else { break };
-            new_contact(a, b, bodies, cfg)
+            if let Some(dst) = slots.get_mut(write) {
+                *dst = new_contact(a, b, bodies, cfg);
+            }
         } else {
             old_at -= 1;
-            match slots.get(old_at) {
-                Some(c) => *c,
-                None => break,
-            }
-        };
-        if let Some(dst) = slots.get_mut(write) {
-            *dst = next;
+            // Slot to slot: `old_at < write` while new pairs remain (every slot above
+            // `write` is placed, and there are `new_at > 0` of them still to come).
+            let Some((low, high)) = slots.split_at_mut_checked(write) else {
+                break;
+            };
+            let (Some(src), Some(dst)) = (low.get(old_at), high.first_mut()) else {
+                break;
+            };
+            *dst = *src;
         }
         if new_at == 0 {
             // The old contacts below `write` are already in place.
@@ -418,10 +422,11 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
         if read != write {
-            // The slot at `read` is not read again: a copy, not a swap.
-            if let Some(&moved) = slots.get(read) {
-                if let Some(dst) = slots.get_mut(write) {
-                    *dst = moved;
+            // The slot at `read` is not read again: a copy, not a swap, slot to slot
+            // (`write < read`, so the two are in different halves of the split).
+            if let Some((low, high)) = slots.split_at_mut_checked(read) {
+                if let (Some(dst), Some(src)) = (low.get_mut(write), high.first()) {
+                    *dst = *src;
                 }
             }
         }
