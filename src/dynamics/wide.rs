@@ -242,18 +242,26 @@ impl<const C: usize> WideStore<C> {
         true
     }
 
-    /// The four slots of group `g`.
+    /// The four slots of group `g`. Inline: every pass asks for every group, and every
+    /// group but the last few lies in the main slots, four slots of one slice.
+    #[inline]
     pub fn group(&mut self, g: usize) -> Option<Group<'_>> {
         let start = g.checked_mul(4)?;
-        let (head, tail) = (&mut self.main, &mut self.extra);
-        // Every group but the last few lies in the main slots: four slots of one slice.
         let end = start.saturating_add(4);
-        if end <= head.len() {
-            return match head.get_mut(start..end) {
+        if end <= self.main.len() {
+            return match self.main.get_mut(start..end) {
                 Some([s0, s1, s2, s3]) => Some(Group { s0, s1, s2, s3 }),
                 _ => None,
             };
         }
+        self.group_across(start)
+    }
+
+    /// The four slots from slot `start` on, across the main and the extra slots.
+    #[cold]
+    #[inline(never)]
+    fn group_across(&mut self, start: usize) -> Option<Group<'_>> {
+        let (head, tail) = (&mut self.main, &mut self.extra);
         let main_len = head.len();
         let from_main = head.get_mut(start.min(main_len)..).unwrap_or(&mut []);
         let skip = start.saturating_sub(main_len);
