@@ -337,7 +337,7 @@ impl Pose4 {
 
     /// `R p + t` per lane, as [`Iso::transform_point`] (`Quat::rotate`: `t = 2 u × p`,
     /// `p + w t + u × t`).
-    #[inline]
+    #[inline(always)]
     pub fn transform_point(&self, p: &V4) -> V4 {
         let t = self.u.cross(p).scale(F4::splat(2.0));
         p.add(&t.scale(self.w))

@@ -37,7 +37,7 @@ impl M4 {
     }
 
     /// `M v`, as [`Mat3::mul_vec`]: `(x vₓ + y v_y) + z v_z`.
-    #[inline]
+    #[inline(always)]
     fn mul_vec(&self, v: &V4) -> V4 {
         self.x
             .scale(v.x)
