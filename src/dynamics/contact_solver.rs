@@ -344,7 +344,9 @@ pub(crate) fn has_rigid_partner<const N: usize>(c: &Contact, bodies: &Pool<Body<
     rigid(c.a) || rigid(c.b)
 }
 
-/// `1 / k` for `k > 0` finite, else 0 (nothing moves along that row).
+/// `1 / k` for `k > 0` finite, else 0 (nothing moves along that row). The scalar oracle
+/// of `F4::recip_or_zero`, which the wide prepare uses.
+#[cfg(test)]
 #[inline]
 pub(crate) fn inverse_or_zero(k: f32) -> f32 {
     if k > 0.0 && k.is_finite() {

@@ -74,6 +74,17 @@ impl F4 {
         F4([a0 / b0, a1 / b1, a2 / b2, a3 / b3])
     }
 
+    /// Lane-wise `1 / self` where the lane is positive and finite, zero elsewhere (an
+    /// effective mass from its inverse, `contact_solver::inverse_or_zero` in each lane):
+    /// two selects around one division of all four lanes. (The lanes below infinity are
+    /// kept first and the positive ones of those then inverted: tested together on the
+    /// same value, the two compares became a scalar bit test per lane.)
+    #[inline]
+    pub fn recip_or_zero(self) -> F4 {
+        let finite = F4::splat(f32::INFINITY).gt_select(self, self, F4::ZERO);
+        finite.gt_select(F4::ZERO, F4::splat(1.0).div(finite), F4::ZERO)
+    }
+
     /// Lane-wise [`scalar::sqrt`].
     #[inline]
     pub fn sqrt(self) -> F4 {
@@ -405,6 +416,27 @@ mod tests {
                 assert_eq!(gt.lane(l).to_bits(), want_gt.to_bits());
                 assert_eq!(eq.lane(l).to_bits(), want_eq.to_bits());
                 assert_eq!(sel.lane(l).to_bits(), want_sel.to_bits());
+            }
+        }
+    }
+
+    /// `recip_or_zero` is `inverse_or_zero` in each lane, to the bit: zero for zero,
+    /// negative, infinite and NaN lanes.
+    #[test]
+    fn reciprocal_lanes_match_the_scalar_inverse() {
+        let inverse_or_zero = crate::dynamics::contact_solver::inverse_or_zero;
+        let special = [0.0, -0.0, -1.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN];
+        let tiny = [f32::MIN_POSITIVE, 1.0e-40, f32::MAX, 3.0];
+        let mut rng = crate::rng::SplitMix64::new(17);
+        for _ in 0..1000 {
+            let x = F4(core::array::from_fn(|_| match rng.next_u64() % 3 {
+                0 => special[(rng.next_u64() % special.len() as u64) as usize],
+                1 => tiny[(rng.next_u64() % tiny.len() as u64) as usize],
+                _ => rng.range(-10.0, 1000.0),
+            }));
+            let r = x.recip_or_zero();
+            for l in 0..4 {
+                assert_eq!(r.lane(l).to_bits(), inverse_or_zero(x.lane(l)).to_bits());
             }
         }
     }

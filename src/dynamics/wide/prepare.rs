@@ -13,7 +13,7 @@
 
 use super::super::body::{Body, BodyKind};
 use super::super::contact::Contact;
-use super::super::contact_solver::{clip_to_disc, inverse_or_zero, sides, Softness};
+use super::super::contact_solver::{clip_to_disc, sides, Softness};
 use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
 use super::*;
@@ -229,13 +229,6 @@ fn gather_lane<const N: usize>(
     }
 }
 
-/// Lane-wise `f` of one value.
-#[inline]
-fn per_lane(x: F4, f: impl Fn(f32) -> f32) -> F4 {
-    let [a, b, c, d] = x.0;
-    F4([f(a), f(b), f(c), f(d)])
-}
-
 /// `if mask { a } else { b }`, lane-wise, for vectors.
 #[inline]
 fn select_v(mask: [bool; 4], a: &V4, b: &V4) -> V4 {
@@ -338,7 +331,7 @@ fn prepare_rows(
         let in_a = x.i_a.mul_vec(&rn_a);
         let in_b = x.i_b.mul_vec(&rn_b);
         let k = x.m_a + x.m_b + rn_a.dot(&in_a) + rn_b.dot(&in_b);
-        let normal_mass = per_lane(k, inverse_or_zero);
+        let normal_mass = k.recip_or_zero();
         let stored = x.impulse.get(j).copied().unwrap_or_default();
         let cap = normal_mass * speed_bound;
         let impulse = F4(core::array::from_fn(|l| {
@@ -525,6 +518,23 @@ fn prepare_patch(
     put_q(q2, IT_A1, on, &it_a[1]);
     put_q(q2, IT_B0, on, &it_b[0]);
     put_q(q2, IT_B1, on, &it_b[1]);
+    // The inverse of the 2×2 tangent mass where its determinant is positive and finite,
+    // else the inverse of each diagonal alone.
+    let inv = F4::splat(1.0).div(det);
+    let regular: [bool; 4] = core::array::from_fn(|l| {
+        let d = det.lane(l);
+        d > 0.0 && d.is_finite()
+    });
+    let tangent_mass = [
+        kxx.recip_or_zero().select_where(regular, kyy * inv),
+        F4::ZERO.select_where(regular, -kxy * inv),
+        kyy.recip_or_zero().select_where(regular, kxx * inv),
+    ];
+    for (i, v) in tangent_mass.iter().enumerate() {
+        if let Some(d) = q1.get_mut(TANGENT_MASS + i) {
+            put(d, on, *v);
+        }
+    }
     for l in 0..4 {
         if !on.get(l).copied().unwrap_or(false) {
             continue;
@@ -533,13 +543,6 @@ fn prepare_patch(
             continue;
         };
         let len = usize::from(x.len.get(l).copied().unwrap_or(0));
-        let (kxx, kyy, kxy, det) = (kxx.lane(l), kyy.lane(l), kxy.lane(l), det.lane(l));
-        let tangent_mass = if det > 0.0 && det.is_finite() {
-            let inv = 1.0 / det;
-            [kyy * inv, -kxy * inv, kxx * inv]
-        } else {
-            [inverse_or_zero(kxx), 0.0, inverse_or_zero(kyy)]
-        };
         let total: f32 = impulses.iter().take(len).map(|i| i.lane(l)).sum();
         let (n, t1, t2) = (x.n.lane(l), x.t1.lane(l), x.t2.lane(l));
         let mu_s = x.mu_s.lane(l);
@@ -554,9 +557,6 @@ fn prepare_patch(
         let twist_limit = mu_s * levers;
         let twist = scalar::clamp(c.twist_impulse, -twist_limit, twist_limit);
         let q1 = &mut group.s1.s;
-        for (i, v) in tangent_mass.iter().enumerate() {
-            set_lane(q1, TANGENT_MASS + i, l, *v);
-        }
         set_lane(q1, TANGENT_IMPULSE, l, clipped[0]);
         set_lane(q1, TANGENT_IMPULSE + 1, l, clipped[1]);
         let q2 = &mut group.s2.s;
@@ -641,7 +641,7 @@ fn prepare_angular_rows(
         } else {
             let ia = x.i_a.mul_vec(d);
             let ib = x.i_b.mul_vec(d);
-            let mass = per_lane(d.dot(&ia) + d.dot(&ib), inverse_or_zero);
+            let mass = (d.dot(&ia) + d.dot(&ib)).recip_or_zero();
             (ia, ib, mass)
         };
         put_q(&mut group.s3.s, IA_AXES + 3 * i, on, &keep_v(wanted, &ia));
