@@ -970,32 +970,36 @@ fn query_with<A: Polytope, B: Polytope>(
     };
     let (center_a, center_b) = (a.center(), b.center());
     let (r_a, r_b) = (a.inner_radius(), b.inner_radius());
-    // Face f of A: `s_f = min_B n_B·y + n·t − d ≤ n_B·c_B − r_B + n·t − d`.
+    // Each centre in the other shape's frame, once: a bound is then one product per face.
+    // (A bound only has to hold within the slack, which is far above its rounding, so it
+    // need not be formed as the separation is.)
+    let center_b_in_a = fr.point(center_b);
+    let center_a_in_b = fr.inv_vector(center_a - fr.t);
+    // Face f of A: `s_f = min_B n·y − d ≤ n·c_B − r_B − d` (`c_B` in A's frame).
     let face_a = best_face(
         a.face_count(),
         |f| face_a_separation(a, b, fr, f),
         |f| {
             let (n, d) = a.plane(f);
-            fr.inv_vector(n).dot(center_b) - r_b + n.dot(fr.t) - d
+            n.dot(center_b_in_a) - r_b - d
         },
         margin,
         slack,
     )
     .map_err(|f| SatAxis::FaceA(f as u16))?;
-    // Face g of B: `s_g = min_A m·x − m·t − e ≤ m·c_A − r_A − m·t − e`.
+    // Face g of B: `s_g = min_A m·x − e ≤ m·c_A − r_A − e` (in B's frame).
     let face_b = best_face(
         b.face_count(),
         |g| face_b_separation(a, b, fr, g),
         |g| {
             let (m_b, e) = b.plane(g);
-            let m = fr.vector(m_b);
-            m.dot(center_a) - r_a - m.dot(fr.t) - e
+            m_b.dot(center_a_in_b) - r_a - e
         },
         margin,
         slack,
     )
     .map_err(|g| SatAxis::FaceB(g as u16))?;
-    let centers = (center_a, fr.point(center_b));
+    let centers = (center_a, center_b_in_a);
     let mut edge: Option<EdgeBest> = None;
     // Edge pairs that cannot beat the best face are skipped a whole edge at a time (see
     // `edge_below`): only an edge pair that separates more than the best face can end
@@ -1003,7 +1007,6 @@ fn query_with<A: Polytope, B: Polytope>(
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
     let prune =
         prune && r_a > 0.0 && r_b > 0.0 && a.has_well_formed_edges() && b.has_well_formed_edges();
-    let center_a_in_b = fr.inv_vector(center_a - fr.t);
     // B's edges once: index, vector (B's frame), start and vector in A's frame, faces.
     let mut edges_b: heapless::Vec<EdgeB, MAX_HULL_EDGES> = heapless::Vec::new();
     for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
@@ -1187,7 +1190,7 @@ const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
 /// of [`edge_axis`] cannot pick the antipode, which would give `n · (p − c) < 0` on a
 /// shape whose arc holds `−n`, while every normal on its arc gives at least its inner
 /// radius.
-#[inline]
+#[inline(always)]
 fn edge_below(e: &PolyEdge, c: Vec3, threshold: f32) -> bool {
     let w = c - e.p0;
     let (dot0, dot1) = (e.n0.dot(w), e.n1.dot(w));
