@@ -296,6 +296,8 @@ pub(crate) trait Polytope {
     fn center(&self) -> Vec3;
     /// The largest core coordinate (m): the size that rounding scales with.
     fn extent(&self) -> f32;
+    /// The largest distance of a vertex from the local origin (m), or more.
+    fn radius(&self) -> f32;
     /// The shape's geometry, for the tie rule of the axis choice ([`prefers_b`]).
     fn geometry(&self) -> Geometry<'_>;
 }
@@ -467,6 +469,10 @@ impl Polytope for Cuboid {
     fn extent(&self) -> f32 {
         self.half_extents.max_elem()
     }
+
+    fn radius(&self) -> f32 {
+        self.half_extents.length()
+    }
     fn geometry(&self) -> Geometry<'_> {
         Geometry::Cuboid(self.half_extents)
     }
@@ -541,6 +547,10 @@ impl Polytope for ConvexHull {
     fn extent(&self) -> f32 {
         // The build tolerance is TOLERANCE times the largest |coordinate|.
         self.tolerance() / ConvexHull::TOLERANCE
+    }
+
+    fn radius(&self) -> f32 {
+        self.bounding_radius()
     }
     fn geometry(&self) -> Geometry<'_> {
         Geometry::Hull(self.vertices())
@@ -687,6 +697,11 @@ impl Polytope for TrianglePolytope {
         // As `manifold::polytope_order` measures a triangle.
         let [u, v, w] = self.vertices;
         u.abs().max(v.abs()).max(w.abs()).max_elem()
+    }
+
+    fn radius(&self) -> f32 {
+        let [u, v, w] = self.vertices;
+        scalar::max(scalar::max(u.length(), v.length()), w.length())
     }
 
     fn geometry(&self) -> Geometry<'_> {
@@ -975,14 +990,19 @@ fn query_with<A: Polytope, B: Polytope>(
     // need not be formed as the separation is.)
     let center_b_in_a = fr.point(center_b);
     let center_a_in_b = fr.inv_vector(center_a - fr.t);
+    // The height of the other shape's centre over each face plane, `n·c − d`, once:
+    // the face bounds read them, and so do the edge bounds' ends (`edge_below_by_heights`).
+    let mut heights_a = [0.0f32; MAX_HULL_FACES];
+    let mut heights_b = [0.0f32; MAX_HULL_FACES];
+    face_heights(a, center_b_in_a, &mut heights_a);
+    face_heights(b, center_a_in_b, &mut heights_b);
+    // Past the table (never, for the shapes here): no bound, nothing skipped.
+    let height = |t: &[f32; MAX_HULL_FACES], f: usize| t.get(f).copied().unwrap_or(f32::INFINITY);
     // Face f of A: `s_f = min_B n·y − d ≤ n·c_B − r_B − d` (`c_B` in A's frame).
     let face_a = best_face(
         a.face_count(),
         |f| face_a_separation(a, b, fr, f),
-        |f| {
-            let (n, d) = a.plane(f);
-            n.dot(center_b_in_a) - r_b - d
-        },
+        |f| height(&heights_a, f) - r_b,
         margin,
         slack,
     )
@@ -991,10 +1011,7 @@ fn query_with<A: Polytope, B: Polytope>(
     let face_b = best_face(
         b.face_count(),
         |g| face_b_separation(a, b, fr, g),
-        |g| {
-            let (m_b, e) = b.plane(g);
-            m_b.dot(center_a_in_b) - r_a - e
-        },
+        |g| height(&heights_b, g) - r_a,
         margin,
         slack,
     )
@@ -1007,15 +1024,34 @@ fn query_with<A: Polytope, B: Polytope>(
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
     let prune =
         prune && r_a > 0.0 && r_b > 0.0 && a.has_well_formed_edges() && b.has_well_formed_edges();
+    // An edge is first judged by its faces' heights (no edge formed), and measured by
+    // `edge_below` only when they cannot tell. `|w| ≤ |c| + radius` for `w` from any
+    // vertex to the other centre `c`.
+    let (threshold_a, threshold_b) = (
+        best_face_separation + r_b - slack,
+        best_face_separation + r_a - slack,
+    );
+    let (reach_a, reach_b) = (
+        center_b_in_a.length() + a.radius(),
+        center_a_in_b.length() + b.radius(),
+    );
     // B's edges once: index, vector (B's frame), start and vector in A's frame, faces.
     let mut edges_b: heapless::Vec<EdgeB, MAX_HULL_EDGES> = heapless::Vec::new();
     for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
-        let (Some(e), Some((f0, f1))) = (b.edge(ib), b.edge_faces(ib)) else {
+        let Some((f0, f1)) = b.edge_faces(ib) else {
+            continue;
+        };
+        let (h0, h1) = (height(&heights_b, f0), height(&heights_b, f1));
+        let quick = edge_below_by_heights(h0, h1, slack, reach_b, threshold_b);
+        if prune && quick == Some(true) {
+            continue;
+        }
+        let Some(e) = b.edge(ib) else {
             continue;
         };
         let vector = e.p1 - e.p0;
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
-        if prune && edge_below(&e, center_a_in_b, best_face_separation + r_a - slack) {
+        if prune && quick.is_none() && edge_below(&e, center_a_in_b, threshold_b) {
             continue;
         }
         // Cannot be full: at most MAX_HULL_EDGES edges.
@@ -1039,9 +1075,19 @@ fn query_with<A: Polytope, B: Polytope>(
     }
     let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
     for ia in 0..a.edge_count() {
+        let quick = match a.edge_faces(ia) {
+            Some((f0, f1)) if prune => {
+                let (h0, h1) = (height(&heights_a, f0), height(&heights_a, f1));
+                edge_below_by_heights(h0, h1, slack, reach_a, threshold_a)
+            }
+            _ => None,
+        };
+        if quick == Some(true) {
+            continue;
+        }
         let Some(ea) = a.edge(ia) else { continue };
         // A supports along `n`, so `n` is on A's arc: `s ≤ n·(c_B − p) − r_B`.
-        if prune && edge_below(&ea, centers.1, best_face_separation + r_b - slack) {
+        if prune && quick.is_none() && edge_below(&ea, centers.1, threshold_a) {
             continue;
         }
         let arc = ArcA::new(ea, fr);
@@ -1175,6 +1221,38 @@ fn best_face(
 /// into an angle on the Gauss map by at most `1 / EDGE_PARALLEL_SIN` (the pair's edges are
 /// at least that far from parallel), doubled for rounding.
 const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
+
+/// `out[f] = n_f · c − d_f` for each face `f` of `p` (`c` in `p`'s frame) that fits.
+#[inline]
+fn face_heights<P: Polytope>(p: &P, c: Vec3, out: &mut [f32; MAX_HULL_FACES]) {
+    for (f, h) in out.iter_mut().enumerate().take(p.face_count()) {
+        let (n, d) = p.plane(f);
+        *h = n.dot(c) - d;
+    }
+}
+
+/// [`edge_below`] decided from the heights `h0`, `h1` of the other shape's centre over
+/// the edge's two face planes, when they suffice: `Some(false)` when an end reaches
+/// `threshold` (the edge is kept: keeping an edge is always right), `Some(true)` when
+/// both faces turn away from the centre by more than `slack` and the far-side bound,
+/// with `reach ≥ |w|`, is below `threshold`; `None` to measure the edge itself.
+///
+/// A height is the edge's own product `n0 · w` (`w` from the edge's start to the centre)
+/// but for the start's distance from the face plane (at most the hull's build
+/// tolerance) and rounding, both well inside `slack`, which also keeps the far-side
+/// bound's premise (both products negative) true of the products themselves.
+#[inline(always)]
+fn edge_below_by_heights(h0: f32, h1: f32, slack: f32, reach: f32, threshold: f32) -> Option<bool> {
+    let ends = scalar::max(h0, h1);
+    if ends >= threshold {
+        return Some(false);
+    }
+    let away = h0 <= -slack && h1 <= -slack;
+    if away && ends + ARC_WIDENING * reach < threshold {
+        return Some(true);
+    }
+    None
+}
 
 /// True when no edge pair with this edge can separate the shapes by `threshold` or more:
 /// `max n · w < threshold` over the unit vectors `n` on the edge's arc of the Gauss map
