@@ -992,17 +992,20 @@ fn query_with<A: Polytope, B: Polytope>(
     let center_a_in_b = fr.inv_vector(center_a - fr.t);
     // The height of the other shape's centre over each face plane, `n·c − d`, once:
     // the face bounds read them, and so do the edge bounds' ends (`edge_below_by_heights`).
-    let mut heights_a = [0.0f32; MAX_HULL_FACES];
-    let mut heights_b = [0.0f32; MAX_HULL_FACES];
-    face_heights(a, center_b_in_a, &mut heights_a);
-    face_heights(b, center_a_in_b, &mut heights_b);
+    // One table of 256 on the stack for everything per face: A's heights in its upper
+    // half throughout; B's in its lower half until the edge loop over A, which then keeps
+    // B's face products with each A edge there (`dots`). At most 124 faces fit a half.
+    let mut table = [0.0f32; 256];
+    let (dots, heights_a) = table.split_at_mut(128);
+    face_heights(a, center_b_in_a, heights_a);
+    face_heights(b, center_a_in_b, dots);
     // Past the table (never, for the shapes here): no bound, nothing skipped.
-    let height = |t: &[f32; MAX_HULL_FACES], f: usize| t.get(f).copied().unwrap_or(f32::INFINITY);
+    let height = |t: &[f32], f: usize| t.get(f).copied().unwrap_or(f32::INFINITY);
     // Face f of A: `s_f = min_B n·y − d ≤ n·c_B − r_B − d` (`c_B` in A's frame).
     let face_a = best_face(
         a.face_count(),
         |f| face_a_separation(a, b, fr, f),
-        |f| height(&heights_a, f) - r_b,
+        |f| height(heights_a, f) - r_b,
         margin,
         slack,
     )
@@ -1011,7 +1014,7 @@ fn query_with<A: Polytope, B: Polytope>(
     let face_b = best_face(
         b.face_count(),
         |g| face_b_separation(a, b, fr, g),
-        |g| height(&heights_b, g) - r_a,
+        |g| height(dots, g) - r_a,
         margin,
         slack,
     )
@@ -1041,7 +1044,7 @@ fn query_with<A: Polytope, B: Polytope>(
         let Some((f0, f1)) = b.edge_faces(ib) else {
             continue;
         };
-        let (h0, h1) = (height(&heights_b, f0), height(&heights_b, f1));
+        let (h0, h1) = (height(dots, f0), height(dots, f1));
         let quick = edge_below_by_heights(h0, h1, slack, reach_b, threshold_b);
         if prune && quick == Some(true) {
             continue;
@@ -1065,9 +1068,8 @@ fn query_with<A: Polytope, B: Polytope>(
     // B's face normals dotted with the current A edge (B's frame): the first triple
     // product of every B edge is a look-up, and most pairs stop there. The pairs that
     // pass it are collected without a branch (which one passes is data), then tested.
-    // Tables indexed by a byte: every look-up is in range.
+    // B's heights are no longer needed: `dots` holds these products from here on.
     let faces_b = b.face_count().min(MAX_HULL_FACES);
-    let mut dots = [0.0f32; 256];
     let mut passing = [0u8; 256];
     let mut pairs_b = [(0u8, 0u8); MAX_HULL_EDGES];
     for (slot, e) in pairs_b.iter_mut().zip(edges_b.iter()) {
@@ -1077,7 +1079,7 @@ fn query_with<A: Polytope, B: Polytope>(
     for ia in 0..a.edge_count() {
         let quick = match a.edge_faces(ia) {
             Some((f0, f1)) if prune => {
-                let (h0, h1) = (height(&heights_a, f0), height(&heights_a, f1));
+                let (h0, h1) = (height(heights_a, f0), height(heights_a, f1));
                 edge_below_by_heights(h0, h1, slack, reach_a, threshold_a)
             }
             _ => None,
@@ -1224,7 +1226,7 @@ const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
 
 /// `out[f] = n_f · c − d_f` for each face `f` of `p` (`c` in `p`'s frame) that fits.
 #[inline]
-fn face_heights<P: Polytope>(p: &P, c: Vec3, out: &mut [f32; MAX_HULL_FACES]) {
+fn face_heights<P: Polytope>(p: &P, c: Vec3, out: &mut [f32]) {
     for (f, h) in out.iter_mut().enumerate().take(p.face_count()) {
         let (n, d) = p.plane(f);
         *h = n.dot(c) - d;
