@@ -994,7 +994,9 @@ fn query_with<A: Polytope, B: Polytope>(
     // the face bounds read them, and so do the edge bounds' ends (`edge_below_by_heights`).
     // One table of 256 on the stack for everything per face: A's heights in its upper
     // half throughout; B's in its lower half until the edge loop over A, which then keeps
-    // B's face products with each A edge there (`dots`). At most 124 faces fit a half.
+    // B's face products with each A edge there (`dots`). A hull's faces fit a half
+    // (checked at compile time below).
+    const _: () = assert!(MAX_HULL_FACES <= 128);
     let mut table = [0.0f32; 256];
     let (dots, heights_a) = table.split_at_mut(128);
     face_heights(a, center_b_in_a, heights_a);
