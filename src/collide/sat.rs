@@ -1046,9 +1046,13 @@ fn query_with<A: Polytope, B: Polytope>(
         let Some((f0, f1)) = b.edge_faces(ib) else {
             continue;
         };
-        let (h0, h1) = (height(dots, f0), height(dots, f1));
-        let quick = edge_below_by_heights(h0, h1, slack, reach_b, threshold_b);
-        if prune && quick == Some(true) {
+        let quick = if prune {
+            let (h0, h1) = (height(dots, f0), height(dots, f1));
+            edge_below_by_heights(h0, h1, slack, reach_b, threshold_b)
+        } else {
+            None
+        };
+        if quick == Some(true) {
             continue;
         }
         let Some(e) = b.edge(ib) else {
