@@ -57,9 +57,10 @@
 //! `pruned_query_matches_the_full_test_bit_for_bit` compares them). Edges are pruned only
 //! when every edge of both shapes runs along its faces' crossing line within `10⁻⁵` rad
 //! (a merged, slightly non-planar hull face can break that), with the arc widened for
-//! that tilt, and every bound carries a slack of ten axis-choice tolerances for rounding
-//! and for a hull's vertices lying up to its build tolerance inside its planes. On the
-//! `hulls` scene this halves the test's work.
+//! that tilt, and only the edges of a shape that holds a ball (a box's or a hull's, also
+//! against a triangle, not a triangle's: see `edge_below`); every bound carries a slack of
+//! ten axis-choice tolerances for rounding and for a hull's vertices lying up to its
+//! build tolerance inside its planes. On the `hulls` scene this halves the test's work.
 //!
 //! Two boxes need no pruning: the arcs of one box's edges along one direction make up the
 //! whole great circle perpendicular to it, so for every pair of edge directions `(i, j)`
@@ -570,8 +571,8 @@ impl Polytope for ConvexHull {
 /// same end points and feature ids. The side faces are true separating axes (the edge is
 /// the triangle's support along `m`) but have no polygon: a side face chosen as the
 /// reference makes the clipping find nothing, and the caller falls back to the general
-/// path. There is no ball inside a triangle ([`Polytope::inner_radius`] is 0), so the
-/// edge pairs are never pruned; 6 × 12 of them against a box cost little.
+/// path. There is no ball inside a triangle ([`Polytope::inner_radius`] is 0), so its own
+/// edges are never pruned; the other shape's are (see `edge_below`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TrianglePolytope {
     vertices: [Vec3; 3],
@@ -605,9 +606,10 @@ impl TrianglePolytope {
 
 impl Polytope for TrianglePolytope {
     fn has_well_formed_edges(&self) -> bool {
-        // Irrelevant (no inner ball, so no pruning), and a quarter arc of a thin triangle
-        // is not what the pruning bounds assume.
-        false
+        // Each edge runs along the crossing line of its two faces: the front (or back)
+        // face and a side face built perpendicular to it through the edge. With no ball
+        // inside, the triangle's own edges are never pruned (`query_with`).
+        true
     }
 
     fn inner_radius(&self) -> f32 {
@@ -1027,8 +1029,11 @@ fn query_with<A: Polytope, B: Polytope>(
     // `edge_below`): only an edge pair that separates more than the best face can end
     // the test, win the axis choice or raise the exact separation.
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
-    let prune =
-        prune && r_a > 0.0 && r_b > 0.0 && a.has_well_formed_edges() && b.has_well_formed_edges();
+    // A shape's edges may be pruned when both shapes' edges are well formed and it holds
+    // a ball (see `edge_below`): both a box's or hull's against another, only theirs
+    // against a triangle.
+    let well_formed = prune && a.has_well_formed_edges() && b.has_well_formed_edges();
+    let (prune_a, prune_b) = (well_formed && r_a > 0.0, well_formed && r_b > 0.0);
     // An edge is first judged by its faces' heights (no edge formed), and measured by
     // `edge_below` only when they cannot tell. `|w| ≤ |c| + radius` for `w` from any
     // vertex to the other centre `c`.
@@ -1046,7 +1051,7 @@ fn query_with<A: Polytope, B: Polytope>(
         let Some((f0, f1)) = b.edge_faces(ib) else {
             continue;
         };
-        let quick = if prune {
+        let quick = if prune_b {
             let (h0, h1) = (height(dots, f0), height(dots, f1));
             edge_below_by_heights(h0, h1, slack, reach_b, threshold_b)
         } else {
@@ -1060,7 +1065,7 @@ fn query_with<A: Polytope, B: Polytope>(
         };
         let vector = e.p1 - e.p0;
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
-        if prune && quick.is_none() && edge_below(&e, center_a_in_b, threshold_b) {
+        if prune_b && quick.is_none() && edge_below(&e, center_a_in_b, threshold_b) {
             continue;
         }
         // Cannot be full: at most MAX_HULL_EDGES edges.
@@ -1084,7 +1089,7 @@ fn query_with<A: Polytope, B: Polytope>(
     let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
     for ia in 0..a.edge_count() {
         let quick = match a.edge_faces(ia) {
-            Some((f0, f1)) if prune => {
+            Some((f0, f1)) if prune_a => {
                 let (h0, h1) = (height(heights_a, f0), height(heights_a, f1));
                 edge_below_by_heights(h0, h1, slack, reach_a, threshold_a)
             }
@@ -1095,7 +1100,7 @@ fn query_with<A: Polytope, B: Polytope>(
         }
         let Some(ea) = a.edge(ia) else { continue };
         // A supports along `n`, so `n` is on A's arc: `s ≤ n·(c_B − p) − r_B`.
-        if prune && quick.is_none() && edge_below(&ea, centers.1, threshold_a) {
+        if prune_a && quick.is_none() && edge_below(&ea, centers.1, threshold_a) {
             continue;
         }
         let arc = ArcA::new(ea, fr);
@@ -1272,10 +1277,13 @@ fn edge_below_by_heights(h0: f32, h1: f32, slack: f32, reach: f32, threshold: f3
 /// the caller passes `threshold = best face separation + r − slack`.
 ///
 /// Edge pairs are only pruned when both shapes' edges are well formed, since the
-/// Gauss-map test then puts the axis on both arcs (within the widening): the centre rule
-/// of [`edge_axis`] cannot pick the antipode, which would give `n · (p − c) < 0` on a
-/// shape whose arc holds `−n`, while every normal on its arc gives at least its inner
-/// radius.
+/// Gauss-map test then puts the axis on both arcs (within the widening), and only the
+/// edges of a shape that holds a ball (inner radius `r > 0`): every normal on its arc
+/// gives `n · (p − c) ≥ r` there, so the centre rule of [`edge_axis`] orients the axis
+/// onto that arc (by this shape's lever, or by the other's when that is larger still,
+/// which the other's arc then signs the same way) and never to the antipode. The other
+/// shape only has to contain the centre it is measured from (`r` may be 0 there: a
+/// triangle's centroid).
 #[inline(always)]
 fn edge_below(e: &PolyEdge, c: Vec3, threshold: f32) -> bool {
     let w = c - e.p0;
@@ -2511,6 +2519,72 @@ mod tests {
         assert!(
             separated > 1000 && overlapping > 1000 && edge_wins > 100 && edges_pruned > 150,
             "{separated} {overlapping} {edge_wins} {edges_pruned}"
+        );
+    }
+
+    /// The same against triangles, where only the box's or hull's edges are pruned (the
+    /// triangle holds no ball): hull–triangle, triangle–hull, box–triangle and
+    /// triangle–box pairs, thin and wide triangles, apart to deeply overlapping.
+    #[test]
+    fn pruned_query_against_triangles_matches_the_full_test_bit_for_bit() {
+        let mut rng = SplitMix64::new(15);
+        let boxed = Cuboid::new(Vec3::new(0.4, 0.3, 0.35)).unwrap();
+        let (mut separated, mut overlapping, mut edge_wins) = (0, 0, 0);
+        let mut tally = |r: &Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis>| match r {
+            Err(_) => separated += 1,
+            Ok((fa, fb, e)) => {
+                overlapping += 1;
+                let face = fa.separation.max(fb.separation);
+                edge_wins += usize::from(e.is_some_and(|e| e.separation > face));
+            }
+        };
+        for round in 0..200 {
+            let count = 4 + (rng.next_u64() % 20) as usize;
+            let pts: std::vec::Vec<Vec3> = (0..count)
+                .map(|_| rng.unit_vector() * rng.range(0.3, 0.8))
+                .collect();
+            let hull = ConvexHull::new(&pts).unwrap();
+            let size = [0.3, 1.0, 2.5][round % 3];
+            let corner = |rng: &mut SplitMix64| rng.unit_vector() * rng.range(0.2, 1.0) * size;
+            let (p, q) = (corner(&mut rng), corner(&mut rng));
+            // Every fifth triangle thin: its third corner near the first edge.
+            let r = if round % 5 == 0 {
+                p + (q - p) * 0.5 + rng.unit_vector() * 0.01 * size
+            } else {
+                corner(&mut rng)
+            };
+            let Ok(t) = Triangle::new(p, q, r) else {
+                continue;
+            };
+            let tri = TrianglePolytope::new(&t);
+            for _ in 0..40 {
+                let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.5), rng.rotation());
+                let fr = Frame::new(&b_in_a);
+                let margin = if round % 2 == 0 { 0.02 } else { 0.3 };
+                let full = query_with(&hull, &tri, &fr, margin, false);
+                tally(&full);
+                let pruned = query_with(&hull, &tri, &fr, margin, true);
+                assert_eq!(
+                    used(pruned),
+                    used(full),
+                    "hull-triangle, round {round}, {b_in_a:?}"
+                );
+                let full = used(query_with(&tri, &hull, &fr, margin, false));
+                let pruned = used(query_with(&tri, &hull, &fr, margin, true));
+                assert_eq!(pruned, full, "triangle-hull, round {round}, {b_in_a:?}");
+                let full = used(query_with(&boxed, &tri, &fr, margin, false));
+                let pruned = used(query_with(&boxed, &tri, &fr, margin, true));
+                assert_eq!(pruned, full, "box-triangle, round {round}, {b_in_a:?}");
+                let full = used(query_with(&tri, &boxed, &fr, margin, false));
+                let pruned = used(query_with(&tri, &boxed, &fr, margin, true));
+                assert_eq!(pruned, full, "triangle-box, round {round}, {b_in_a:?}");
+            }
+        }
+        // Every kind of outcome was compared (hull against triangle), edge pairs winning
+        // included.
+        assert!(
+            separated > 500 && overlapping > 500 && edge_wins > 50,
+            "{separated} {overlapping} {edge_wins}"
         );
     }
 
