@@ -2464,6 +2464,49 @@ mod tests {
         }
     }
 
+    /// Asserts that the pruned test answers what the full test answers for `a` and `b`
+    /// at `fr` (`what` names the case), and returns the full test's answer.
+    fn pruned_is_full<A: Polytope, B: Polytope>(
+        a: &A,
+        b: &B,
+        fr: &Frame,
+        margin: f32,
+        what: &str,
+    ) -> Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis> {
+        let full = query_with(a, b, fr, margin, false);
+        let pruned = query_with(a, b, fr, margin, true);
+        assert_eq!(used(pruned), used(full), "{what}");
+        full
+    }
+
+    /// How many answers were "apart", how many "overlapping", and how many of those had
+    /// an edge pair beating the best face.
+    #[derive(Debug, Default)]
+    struct Outcomes {
+        separated: usize,
+        overlapping: usize,
+        edge_wins: usize,
+    }
+
+    impl Outcomes {
+        fn add(&mut self, r: &Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis>) {
+            match r {
+                Err(_) => self.separated += 1,
+                Ok((fa, fb, e)) => {
+                    self.overlapping += 1;
+                    let face = fa.separation.max(fb.separation);
+                    self.edge_wins += usize::from(e.is_some_and(|e| e.separation > face));
+                }
+            }
+        }
+
+        /// More than `each` answers apart and `each` overlapping, and more than `edges`
+        /// won by an edge pair.
+        fn cover(&self, each: usize, edges: usize) -> bool {
+            self.separated > each && self.overlapping > each && self.edge_wins > edges
+        }
+    }
+
     /// The pruned test (faces by the ball bound, edges by the Gauss-map arc bound) answers
     /// exactly what measuring every face and edge pair answers, on hull–hull and
     /// hull–box pairs from apart to deeply overlapping, flat and stretched hulls included.
@@ -2471,7 +2514,7 @@ mod tests {
     fn pruned_query_matches_the_full_test_bit_for_bit() {
         let mut rng = SplitMix64::new(14);
         let boxed = Cuboid::new(Vec3::new(0.5, 0.2, 0.35)).unwrap();
-        let (mut separated, mut overlapping, mut edge_wins, mut edges_pruned) = (0, 0, 0, 0);
+        let (mut seen, mut edges_pruned) = (Outcomes::default(), 0);
         for round in 0..300 {
             let hull = |rng: &mut SplitMix64| {
                 let count = 4 + (rng.next_u64() % 28) as usize;
@@ -2495,30 +2538,29 @@ mod tests {
                 let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 2.5), rng.rotation());
                 let fr = Frame::new(&b_in_a);
                 let margin = if round % 2 == 0 { 0.02 } else { 0.3 };
-                let full = used(query_with(&a, &b, &fr, margin, false));
-                let pruned = used(query_with(&a, &b, &fr, margin, true));
-                assert_eq!(pruned, full, "hull pair, round {round}, {b_in_a:?}");
-                match query_with(&a, &b, &fr, margin, false) {
-                    Err(_) => separated += 1,
-                    Ok((fa, fb, e)) => {
-                        overlapping += 1;
-                        let face = fa.separation.max(fb.separation);
-                        edge_wins += usize::from(e.is_some_and(|e| e.separation > face));
-                    }
-                }
-                let full = used(query_with(&a, &boxed, &fr, margin, false));
-                let pruned = used(query_with(&a, &boxed, &fr, margin, true));
-                assert_eq!(pruned, full, "hull-box pair, round {round}, {b_in_a:?}");
-                let full = used(query_with(&boxed, &b, &fr, margin, false));
-                let pruned = used(query_with(&boxed, &b, &fr, margin, true));
-                assert_eq!(pruned, full, "box-hull pair, round {round}, {b_in_a:?}");
+                let case = |what: &str| std::format!("{what}, round {round}, {b_in_a:?}");
+                seen.add(&pruned_is_full(&a, &b, &fr, margin, &case("hull pair")));
+                seen.add(&pruned_is_full(
+                    &a,
+                    &boxed,
+                    &fr,
+                    margin,
+                    &case("hull-box pair"),
+                ));
+                seen.add(&pruned_is_full(
+                    &boxed,
+                    &b,
+                    &fr,
+                    margin,
+                    &case("box-hull pair"),
+                ));
             }
         }
         // Every kind of outcome was compared, edge pairs winning included, and most hull
         // pairs had their edges pruned.
         assert!(
-            separated > 1000 && overlapping > 1000 && edge_wins > 100 && edges_pruned > 150,
-            "{separated} {overlapping} {edge_wins} {edges_pruned}"
+            seen.cover(1000, 100) && edges_pruned > 150,
+            "{seen:?} {edges_pruned}"
         );
     }
 
@@ -2529,15 +2571,7 @@ mod tests {
     fn pruned_query_against_triangles_matches_the_full_test_bit_for_bit() {
         let mut rng = SplitMix64::new(15);
         let boxed = Cuboid::new(Vec3::new(0.4, 0.3, 0.35)).unwrap();
-        let (mut separated, mut overlapping, mut edge_wins) = (0, 0, 0);
-        let mut tally = |r: &Result<(FaceBest, FaceBest, Option<EdgeBest>), SatAxis>| match r {
-            Err(_) => separated += 1,
-            Ok((fa, fb, e)) => {
-                overlapping += 1;
-                let face = fa.separation.max(fb.separation);
-                edge_wins += usize::from(e.is_some_and(|e| e.separation > face));
-            }
-        };
+        let mut seen = Outcomes::default();
         for round in 0..200 {
             let count = 4 + (rng.next_u64() % 20) as usize;
             let pts: std::vec::Vec<Vec3> = (0..count)
@@ -2561,31 +2595,39 @@ mod tests {
                 let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.5), rng.rotation());
                 let fr = Frame::new(&b_in_a);
                 let margin = if round % 2 == 0 { 0.02 } else { 0.3 };
-                let full = query_with(&hull, &tri, &fr, margin, false);
-                tally(&full);
-                let pruned = query_with(&hull, &tri, &fr, margin, true);
-                assert_eq!(
-                    used(pruned),
-                    used(full),
-                    "hull-triangle, round {round}, {b_in_a:?}"
-                );
-                let full = used(query_with(&tri, &hull, &fr, margin, false));
-                let pruned = used(query_with(&tri, &hull, &fr, margin, true));
-                assert_eq!(pruned, full, "triangle-hull, round {round}, {b_in_a:?}");
-                let full = used(query_with(&boxed, &tri, &fr, margin, false));
-                let pruned = used(query_with(&boxed, &tri, &fr, margin, true));
-                assert_eq!(pruned, full, "box-triangle, round {round}, {b_in_a:?}");
-                let full = used(query_with(&tri, &boxed, &fr, margin, false));
-                let pruned = used(query_with(&tri, &boxed, &fr, margin, true));
-                assert_eq!(pruned, full, "triangle-box, round {round}, {b_in_a:?}");
+                let case = |what: &str| std::format!("{what}, round {round}, {b_in_a:?}");
+                seen.add(&pruned_is_full(
+                    &hull,
+                    &tri,
+                    &fr,
+                    margin,
+                    &case("hull-triangle"),
+                ));
+                seen.add(&pruned_is_full(
+                    &tri,
+                    &hull,
+                    &fr,
+                    margin,
+                    &case("triangle-hull"),
+                ));
+                seen.add(&pruned_is_full(
+                    &boxed,
+                    &tri,
+                    &fr,
+                    margin,
+                    &case("box-triangle"),
+                ));
+                seen.add(&pruned_is_full(
+                    &tri,
+                    &boxed,
+                    &fr,
+                    margin,
+                    &case("triangle-box"),
+                ));
             }
         }
-        // Every kind of outcome was compared (hull against triangle), edge pairs winning
-        // included.
-        assert!(
-            separated > 500 && overlapping > 500 && edge_wins > 50,
-            "{separated} {overlapping} {edge_wins}"
-        );
+        // Every kind of outcome was compared, edge pairs winning included.
+        assert!(seen.cover(500, 50), "{seen:?}");
     }
 
     #[test]
