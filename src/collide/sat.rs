@@ -702,8 +702,7 @@ impl Polytope for TrianglePolytope {
     }
 
     fn radius(&self) -> f32 {
-        let [u, v, w] = self.vertices;
-        scalar::max(scalar::max(u.length(), v.length()), w.length())
+        self.triangle().bounding_radius()
     }
 
     fn geometry(&self) -> Geometry<'_> {
