@@ -18,7 +18,9 @@
 //! for each of `substeps` sub-steps of h = dt / substeps:
 //!     integrate velocities     v += h (g + F/m), ω += h I⁻¹ τ, damping, speed limits
 //!     warm start               apply the accumulated impulses again
-//!     solve                    `velocity_iterations` soft iterations (push-out)
+//!     solve                    `velocity_iterations` soft iterations (push-out), with
+//!                              friction, rolling and twist except on torque-free
+//!                              contacts (balls: `contact_solver::torque_free`)
 //!     integrate positions      speed limits again (the solve may exceed them),
 //!                              Δp += v h, q ← q + ½ h ω q (normalised)
 //!     relax                    `relax_iterations` iterations without push-out, with
@@ -723,6 +725,100 @@ mod tests {
             world.step();
         }
         assert!(lanes > 200, "{lanes} lanes compared");
+    }
+
+    /// A soft pass leaves the friction, twist and rolling impulses of torque-free lanes
+    /// (a ball on the ground: no normal impulse turns a body) bit for bit as the warm
+    /// start left them and moves the others'; the relax pass then moves those of the
+    /// torque-free lanes too. Each lane's mark against the rule from its bodies.
+    #[test]
+    fn soft_passes_leave_the_friction_of_torque_free_lanes_to_the_relax() {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(compare_soft_and_relax_friction)
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
+    fn compare_soft_and_relax_friction() {
+        let mut world = prepare_world();
+        let (mut free, mut others, mut moved_soft, mut moved_relax) = (0, 0, 0, 0);
+        for step in 0..60 {
+            let mut w = world.clone();
+            let cfg = w.config;
+            let h = cfg.substep();
+            gather(&mut w.solver, &mut w.bodies, &cfg, h);
+            plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+            let (store, sbodies) = (&mut w.solver.store, &mut w.solver.bodies);
+            wide::warm_start(store, sbodies);
+            let impulses = |store: &mut WideStore<512>| {
+                let mut out = std::vec::Vec::new();
+                for g in 0..store.groups as usize {
+                    let group = store.group(g).unwrap();
+                    for l in 0..4 {
+                        if group.contact(l) != NONE {
+                            out.push((group.is_torque_free(l), group.friction_impulses(l)));
+                        }
+                    }
+                }
+                out
+            };
+            // The mark against the rule: each side a ball or not a moving dynamic body.
+            for g in 0..store.groups as usize {
+                let group = store.group(g).unwrap();
+                for l in 0..4 {
+                    let ci = group.contact(l);
+                    if ci == NONE {
+                        continue;
+                    }
+                    let c = &w.contacts[ci as usize];
+                    let round = |slot: u32| {
+                        let b = w.bodies.at(slot as usize).unwrap();
+                        let solved = w.solver.index[slot as usize] != NONE;
+                        matches!(b.shape, Shape::Sphere(_))
+                            || b.kind != BodyKind::Dynamic
+                            || !solved
+                    };
+                    assert_eq!(
+                        group.is_torque_free(l),
+                        round(c.a) && round(c.b),
+                        "step {step}"
+                    );
+                }
+            }
+            let before = impulses(store);
+            let soft = wide::Pass {
+                use_bias: true,
+                moved: true,
+                last: false,
+            };
+            wide::solve(store, sbodies, &cfg, 1.0 / h, soft);
+            let after_soft = impulses(store);
+            integrate_positions(sbodies, h, &cfg);
+            let relax = wide::Pass {
+                use_bias: false,
+                moved: true,
+                last: false,
+            };
+            wide::solve(store, sbodies, &cfg, 1.0 / h, relax);
+            let after_relax = impulses(store);
+            let bits = |x: [f32; 5]| x.map(f32::to_bits);
+            for ((b, s), r) in before.iter().zip(&after_soft).zip(&after_relax) {
+                if b.0 {
+                    free += 1;
+                    assert_eq!(bits(b.1), bits(s.1), "step {step}");
+                    moved_relax += usize::from(bits(s.1) != bits(r.1));
+                } else {
+                    others += 1;
+                    moved_soft += usize::from(bits(b.1) != bits(s.1));
+                }
+            }
+            world.step();
+        }
+        assert!(free > 100 && others > 100, "{free} {others}");
+        assert!(moved_soft > others / 2, "{moved_soft} of {others}");
+        assert!(moved_relax > free / 2, "{moved_relax} of {free}");
     }
 
     /// Overflow groups solved in runs of lanes without a shared body give the bits of the

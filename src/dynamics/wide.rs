@@ -71,6 +71,8 @@ pub(crate) const PAD_SLOTS: usize = 4;
 
 /// The mask of a pass over a full group.
 const ALL_LANES: [bool; 4] = [true; 4];
+/// No lane.
+const NO_LANES: [bool; 4] = [false; 4];
 
 /// Per-contact data per slot quarter.
 const QUARTER: usize = 19;
@@ -140,6 +142,8 @@ const IB_AXES: usize = 9;
 /// Flag bits of a lane's integer in slot 3 (above the point count in the low byte).
 const STICKING: u32 = 1 << 8;
 const ESTABLISHED: u32 = 1 << 9;
+/// `contact_solver::torque_free`: no friction rows in the soft passes.
+const TORQUE_FREE: u32 = 1 << 10;
 
 #[inline]
 fn v4(s: &[F4; QUARTER], at: usize) -> V4 {
@@ -308,6 +312,39 @@ impl Group<'_> {
         (f0.max(f1).max(f2.max(f3)) as usize).min(4)
     }
 
+    /// Lanes whose contact is torque-free (`contact_solver::torque_free`).
+    #[inline]
+    fn torque_free(&self) -> [bool; 4] {
+        self.s3.idx.map(|f| f & TORQUE_FREE != 0)
+    }
+
+    /// Lane `l`'s friction impulses: the two tangent, two rolling and the twist impulse
+    /// (the solver's tests).
+    #[cfg(test)]
+    pub(crate) fn friction_impulses(&self, l: usize) -> [f32; 5] {
+        let (q1, q2) = (&self.s1.s, &self.s2.s);
+        [
+            f4(q1, TANGENT_IMPULSE).lane(l),
+            f4(q1, TANGENT_IMPULSE + 1).lane(l),
+            f4(q2, ANGULAR_IMPULSE).lane(l),
+            f4(q2, ANGULAR_IMPULSE + 1).lane(l),
+            f4(q2, ANGULAR_IMPULSE + 2).lane(l),
+        ]
+    }
+
+    /// Whether lane `l` is marked torque-free (the solver's tests).
+    #[cfg(test)]
+    pub(crate) fn is_torque_free(&self, l: usize) -> bool {
+        self.torque_free().get(l).copied().unwrap_or(false)
+    }
+
+    /// Some lane is torque-free.
+    #[inline]
+    fn has_torque_free(&self) -> bool {
+        let [f0, f1, f2, f3] = self.s3.idx;
+        (f0 | f1 | f2 | f3) & TORQUE_FREE != 0
+    }
+
     /// Lanes holding a contact.
     fn active(&self) -> [bool; 4] {
         core::array::from_fn(|l| self.contact(l) != NONE)
@@ -420,7 +457,8 @@ impl Group<'_> {
         }
         let flags = u32::from(k.len)
             | if k.sticking { STICKING } else { 0 }
-            | if k.established { ESTABLISHED } else { 0 };
+            | if k.established { ESTABLISHED } else { 0 }
+            | if k.torque_free { TORQUE_FREE } else { 0 };
         if let Some(x) = self.s3.idx.get_mut(l) {
             *x = flags;
         }
@@ -498,6 +536,7 @@ impl Group<'_> {
             radius_sum: f4(s1, RADIUS_SUM).lane(l),
             sticking: flags & STICKING != 0,
             established: flags & ESTABLISHED != 0,
+            torque_free: flags & TORQUE_FREE != 0,
             ..ContactConstraint::default()
         };
         for j in 0..usize::from(k.len) {
@@ -866,6 +905,9 @@ fn solve_with<const C: usize>(
         let (masks, n) = passes(&group, overflow, runs);
         let rows = group.point_rows();
         let bouncy = group.bouncy();
+        // A soft pass leaves the friction rows of torque-free lanes to the relax passes
+        // (`contact_solver::torque_free`).
+        let skips = a.2.use_bias && group.has_torque_free();
         for mask in masks.iter().take(n) {
             // A full group of a colour (every coloured group but the last) gets its own
             // copy of the kernel, where the lane selects fold away, with one, two or four
@@ -873,16 +915,47 @@ fn solve_with<const C: usize>(
             // point loop unrolls in each. Overflow runs take the masked kernel, whatever
             // their lanes.
             let (g, bodies) = (&mut group, &mut *bodies);
-            match (!overflow && *mask == ALL_LANES, rows, bouncy) {
-                (true, 1, false) => solve_group::<1, false>(g, bodies, a, ALL_LANES),
-                (true, 2, false) => solve_group::<2, false>(g, bodies, a, ALL_LANES),
-                (true, _, false) => solve_group::<4, false>(g, bodies, a, ALL_LANES),
-                (true, 1, true) => solve_group::<1, true>(g, bodies, a, ALL_LANES),
-                (true, 2, true) => solve_group::<2, true>(g, bodies, a, ALL_LANES),
-                (true, _, true) => solve_group::<4, true>(g, bodies, a, ALL_LANES),
-                _ => solve_group::<4, true>(g, bodies, a, *mask),
+            let full = !overflow && *mask == ALL_LANES;
+            if skips {
+                skip_torque_free(g, bodies, a, *mask, full, bouncy);
+                continue;
+            }
+            let all = (ALL_LANES, ALL_LANES);
+            match (full, rows, bouncy) {
+                (true, 1, false) => solve_group::<1, false, true>(g, bodies, a, all),
+                (true, 2, false) => solve_group::<2, false, true>(g, bodies, a, all),
+                (true, _, false) => solve_group::<4, false, true>(g, bodies, a, all),
+                (true, 1, true) => solve_group::<1, true, true>(g, bodies, a, all),
+                (true, 2, true) => solve_group::<2, true, true>(g, bodies, a, all),
+                (true, _, true) => solve_group::<4, true, true>(g, bodies, a, all),
+                _ => solve_group::<4, true, true>(g, bodies, a, (*mask, *mask)),
             }
         }
+    }
+}
+
+/// A soft pass over the lanes `mask` of a group with torque-free lanes: their friction
+/// rows are left out. A full group of torque-free lanes only (balls, one point each)
+/// takes kernels without friction rows; the rest (an overflow run, a group that mixes
+/// them with other contacts) the masked kernel with the friction rows of the others.
+#[inline(always)]
+fn skip_torque_free(
+    g: &mut Group<'_>,
+    bodies: &mut [SolverBody],
+    a: (&WorldConfig, f32, Pass),
+    mask: [bool; 4],
+    full: bool,
+    bouncy: bool,
+) {
+    let free = g.torque_free();
+    let rubs: [bool; 4] = core::array::from_fn(|l| {
+        mask.get(l).copied().unwrap_or(false) && !free.get(l).copied().unwrap_or(false)
+    });
+    let none = (ALL_LANES, NO_LANES);
+    match (full && rubs == NO_LANES && g.point_rows() == 1, bouncy) {
+        (true, false) => solve_group::<1, false, false>(g, bodies, a, none),
+        (true, true) => solve_group::<1, true, false>(g, bodies, a, none),
+        _ => solve_group::<4, true, true>(g, bodies, a, (mask, rubs)),
     }
 }
 
@@ -937,11 +1010,11 @@ pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
 /// closing speed at impact and the impulse so far); a group without restitution in any
 /// lane skips them, as that pass never reads its lanes.
 #[inline(always)]
-fn solve_group<const ROWS: usize, const BOUNCY: bool>(
+fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
     (cfg, inv_h, pass): (&WorldConfig, f32, Pass),
-    mask: [bool; 4],
+    (mask, rubs): ([bool; 4], [bool; 4]),
 ) {
     let ia = group.s0.idx;
     let ib = group.s1.idx;
@@ -1016,10 +1089,12 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool>(
             p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         }
     }
-    solve_patch(
-        group, &sh, &mut a, &mut b, cfg, total, levers, pass.last, ROWS, mask,
-    );
-    solve_rolling(group, &sh, &mut a, &mut b, total, mask);
+    if RUB {
+        solve_patch(
+            group, &sh, &mut a, &mut b, cfg, total, levers, pass.last, ROWS, rubs,
+        );
+        solve_rolling(group, &sh, &mut a, &mut b, total, rubs);
+    }
     a.scatter(bodies, &ia, mask);
     b.scatter(bodies, &ib, mask);
 }

@@ -13,7 +13,7 @@
 
 use super::super::body::{Body, BodyKind};
 use super::super::contact::Contact;
-use super::super::contact_solver::{clip_to_disc, sides, Softness};
+use super::super::contact_solver::{clip_to_disc, sides, torque_free, Softness};
 use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
 use super::*;
@@ -61,6 +61,8 @@ impl M4 {
 struct Inputs {
     /// The lane's contact pushes (the scalar prepare would return true).
     on: [bool; 4],
+    /// `contact_solver::torque_free` per lane.
+    torque_free: [bool; 4],
     /// Point `j` exists in lane `l`: `point[j][l]`.
     point: [[bool; 4]; 4],
     len: [u8; 4],
@@ -147,6 +149,9 @@ fn gather_lane<const N: usize>(
     let (m_a, i_a, m_b, i_b) = (side.m_a, side.i_a, side.m_b, side.i_b);
     if let Some(on) = x.on.get_mut(l) {
         *on = true;
+    }
+    if let Some(t) = x.torque_free.get_mut(l) {
+        *t = torque_free(&side);
     }
     let n = c.normal;
     let t1 = n.any_perpendicular();
@@ -440,7 +445,10 @@ fn prepare_rows(
     prepare_patch(group, x, &r_a, &r_b, &impulses, &arms, lanes, contacts, cfg);
     let flags: [u32; 4] = core::array::from_fn(|l| {
         let est = carried.lane(l) > 0.0;
-        u32::from(x.len.get(l).copied().unwrap_or(0)) | if est { ESTABLISHED } else { 0 }
+        let free = x.torque_free.get(l).copied().unwrap_or(false);
+        u32::from(x.len.get(l).copied().unwrap_or(0))
+            | if est { ESTABLISHED } else { 0 }
+            | if free { TORQUE_FREE } else { 0 }
     });
     for (l, f) in flags.iter().enumerate() {
         if on.get(l).copied().unwrap_or(false) {
