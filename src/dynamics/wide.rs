@@ -32,6 +32,10 @@
 //! ends, corners) runs a kernel of one point row instead of four, and one whose contacts
 //! have at most two (edges, capsules lying down) a kernel of two: the same velocities
 //! (an empty row can at most turn a velocity component of −0 into +0) for less work.
+//!
+//! A soft pass leaves the friction, twist and rolling rows of torque-free contacts (balls:
+//! `contact_solver::torque_free`) to the relax passes: a full group of them runs a kernel
+//! without those rows, a group that mixes them with other contacts the masked kernel.
 
 mod prepare;
 
@@ -917,7 +921,7 @@ fn solve_with<const C: usize>(
             let (g, bodies) = (&mut group, &mut *bodies);
             let full = !overflow && *mask == ALL_LANES;
             if skips {
-                skip_torque_free(g, bodies, a, *mask, full, bouncy);
+                skip_torque_free(g, bodies, a, *mask, full && rows == 1, bouncy);
                 continue;
             }
             let all = (ALL_LANES, ALL_LANES);
@@ -935,16 +939,17 @@ fn solve_with<const C: usize>(
 }
 
 /// A soft pass over the lanes `mask` of a group with torque-free lanes: their friction
-/// rows are left out. A full group of torque-free lanes only (balls, one point each)
-/// takes kernels without friction rows; the rest (an overflow run, a group that mixes
-/// them with other contacts) the masked kernel with the friction rows of the others.
+/// rows are left out. A full group of one-point rows (`full_single`) whose lanes are all
+/// torque-free (balls) takes kernels without friction rows; the rest (an overflow run, a
+/// group that mixes them with other contacts) the masked kernel with the friction rows of
+/// the others.
 #[inline(always)]
 fn skip_torque_free(
     g: &mut Group<'_>,
     bodies: &mut [SolverBody],
     a: (&WorldConfig, f32, Pass),
     mask: [bool; 4],
-    full: bool,
+    full_single: bool,
     bouncy: bool,
 ) {
     let free = g.torque_free();
@@ -952,7 +957,7 @@ fn skip_torque_free(
         mask.get(l).copied().unwrap_or(false) && !free.get(l).copied().unwrap_or(false)
     });
     let none = (ALL_LANES, NO_LANES);
-    match (full && rubs == NO_LANES && g.point_rows() == 1, bouncy) {
+    match (full_single && rubs == NO_LANES, bouncy) {
         (true, false) => solve_group::<1, false, false>(g, bodies, a, none),
         (true, true) => solve_group::<1, true, false>(g, bodies, a, none),
         _ => solve_group::<4, true, true>(g, bodies, a, (mask, rubs)),
@@ -1005,10 +1010,11 @@ pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
     solve_with(store, bodies, (cfg, inv_h, pass), one_lane_at_a_time);
 }
 
-/// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`):
-/// `ROWS` point rows, and with `BOUNCY` the records the restitution pass reads (the
-/// closing speed at impact and the impulse so far); a group without restitution in any
-/// lane skips them, as that pass never reads its lanes.
+/// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`) in the lanes
+/// `mask`: `ROWS` point rows, with `BOUNCY` the records the restitution pass reads (the
+/// closing speed at impact and the impulse so far; a group without restitution in any
+/// lane skips them, as that pass never reads its lanes), and with `RUB` the friction,
+/// twist and rolling rows of the lanes `rubs`.
 #[inline(always)]
 fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
     group: &mut Group<'_>,
