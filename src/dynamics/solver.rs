@@ -677,18 +677,36 @@ mod tests {
         w
     }
 
+    /// A copy of `world` gathered and planned as a step begins: the copy, its
+    /// configuration and the sub-step.
+    fn planned(
+        world: &World<'static, 64, 512, 64>,
+    ) -> (World<'static, 64, 512, 64>, WorldConfig, f32) {
+        let mut w = world.clone();
+        let cfg = w.config;
+        let h = cfg.substep();
+        gather(&mut w.solver, &mut w.bodies, &cfg, h);
+        plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+        (w, cfg, h)
+    }
+
+    /// Run `f` on a thread with a 64 MiB stack: worlds, their clones and the stores are
+    /// large for a debug build's test thread.
+    fn on_a_big_stack(f: fn()) {
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(f)
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
     /// The wide prepare (`wide/prepare.rs`) gives every lane the bits the scalar
     /// `contact_solver::prepare` and `Group::store_lane` give it, at the start and in
     /// the middle of a pile's motion (warm impulses, sticking and sliding patches).
     #[test]
     fn the_wide_prepare_gives_each_lane_the_scalar_prepare() {
-        // Worlds, their clones and the stores are large for a debug build's test thread.
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(compare_wide_and_scalar_prepare)
-            .unwrap()
-            .join()
-            .unwrap();
+        on_a_big_stack(compare_wide_and_scalar_prepare);
     }
 
     fn compare_wide_and_scalar_prepare() {
@@ -696,10 +714,7 @@ mod tests {
         let mut lanes = 0usize;
         for step in 0..90 {
             if step % 6 == 1 {
-                let mut w = world.clone();
-                let cfg = w.config;
-                gather(&mut w.solver, &mut w.bodies, &cfg, cfg.substep());
-                plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+                let (w, cfg, _) = planned(&world);
                 let mut reference = w.solver.store.clone();
                 let softness = contact_solver::Softness::for_contacts(&cfg);
                 let mut k = contact_solver::ContactConstraint::default();
@@ -737,23 +752,14 @@ mod tests {
     /// torque-free lanes too. Each lane's mark against the rule from its bodies.
     #[test]
     fn soft_passes_leave_the_friction_of_torque_free_lanes_to_the_relax() {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(compare_soft_and_relax_friction)
-            .unwrap()
-            .join()
-            .unwrap();
+        on_a_big_stack(compare_soft_and_relax_friction);
     }
 
     fn compare_soft_and_relax_friction() {
         let mut world = prepare_world();
         let (mut free, mut others, mut moved_soft, mut moved_relax) = (0, 0, 0, 0);
         for step in 0..60 {
-            let mut w = world.clone();
-            let cfg = w.config;
-            let h = cfg.substep();
-            gather(&mut w.solver, &mut w.bodies, &cfg, h);
-            plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+            let (mut w, cfg, h) = planned(&world);
             let (store, sbodies) = (&mut w.solver.store, &mut w.solver.bodies);
             wide::warm_start(store, sbodies);
             let impulses = |store: &mut WideStore<512>| {
@@ -791,21 +797,17 @@ mod tests {
                     );
                 }
             }
-            let before = impulses(store);
-            let soft = wide::Pass {
-                use_bias: true,
+            // A soft (`true`) or relax (`false`) pass, after the bodies moved.
+            let pass = |use_bias| wide::Pass {
+                use_bias,
                 moved: true,
                 last: false,
             };
-            wide::solve(store, sbodies, &cfg, 1.0 / h, soft);
+            let before = impulses(store);
+            wide::solve(store, sbodies, &cfg, 1.0 / h, pass(true));
             let after_soft = impulses(store);
             integrate_positions(sbodies, h, &cfg);
-            let relax = wide::Pass {
-                use_bias: false,
-                moved: true,
-                last: false,
-            };
-            wide::solve(store, sbodies, &cfg, 1.0 / h, relax);
+            wide::solve(store, sbodies, &cfg, 1.0 / h, pass(false));
             let after_relax = impulses(store);
             let bits = |x: [f32; 5]| x.map(f32::to_bits);
             for ((b, s), r) in before.iter().zip(&after_soft).zip(&after_relax) {
@@ -831,23 +833,14 @@ mod tests {
     /// some overflow group holds a run of several lanes and another has to split.
     #[test]
     fn overflow_runs_give_the_bits_of_one_lane_at_a_time() {
-        std::thread::Builder::new()
-            .stack_size(64 << 20)
-            .spawn(compare_runs_and_lanes)
-            .unwrap()
-            .join()
-            .unwrap();
+        on_a_big_stack(compare_runs_and_lanes);
     }
 
     fn compare_runs_and_lanes() {
         let mut world = prepare_world();
         let (mut shared_runs, mut split_groups) = (0, 0);
         for step in 0..90 {
-            let mut w = world.clone();
-            let cfg = w.config;
-            let h = cfg.substep();
-            gather(&mut w.solver, &mut w.bodies, &cfg, h);
-            plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+            let (mut w, cfg, h) = planned(&world);
             let store = &mut w.solver.store;
             for g in store.overflow_from..store.groups {
                 let group = store.group(g as usize).unwrap();
