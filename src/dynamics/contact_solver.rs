@@ -121,6 +121,7 @@ use super::contact::Contact;
 use super::pool::Pool;
 use super::solver::NONE;
 use super::solver::{is_active, is_moving_kinematic, SolverBody};
+use super::support::{self, OneWay};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Vec3};
 
@@ -381,6 +382,9 @@ pub(crate) struct Sides<'s, 'a> {
     pub m_b: f32,
     /// B's world inverse inertia.
     pub i_b: Mat3,
+    /// One side holds the other up one-way (`support.rs`): its mass and inertia above
+    /// read as zero.
+    pub one_way: bool,
 }
 
 /// A contact whose normal line passes through the centre of mass of every body it can
@@ -402,12 +406,15 @@ pub(crate) fn torque_free(side: &Sides<'_, '_>) -> bool {
 }
 
 /// The [`Sides`] of contact `c`, or `None` when it does not push: a sensor, no point, a
-/// missing body, or no moving dynamic body.
-pub(crate) fn sides<'s, 'a, const N: usize>(
+/// missing body, or no moving dynamic body. `ONE_WAY` in a step where contacts may be
+/// one-way under `gravity` (m/s², `support.rs`); the other steps run without the test.
+#[inline(always)]
+pub(crate) fn sides<'s, 'a, const N: usize, const ONE_WAY: bool>(
     c: &Contact,
     bodies: &'s Pool<Body<'a>, N>,
     solver_bodies: &'s [SolverBody],
     solver_index: &[u32; N],
+    gravity: Vec3,
 ) -> Option<Sides<'s, 'a>> {
     if c.sensor || c.len == 0 {
         return None;
@@ -424,7 +431,7 @@ pub(crate) fn sides<'s, 'a, const N: usize>(
     if m_a <= 0.0 && m_b <= 0.0 {
         return None;
     }
-    Some(Sides {
+    let mut side = Sides {
         body_a,
         body_b,
         sa,
@@ -435,7 +442,30 @@ pub(crate) fn sides<'s, 'a, const N: usize>(
         i_a,
         m_b,
         i_b,
-    })
+        one_way: false,
+    };
+    // Under a heavy body, the lighter support keeps its velocity (`support.rs`); only
+    // in an island the ground holds up, in a step with a heavy contact.
+    if ONE_WAY {
+        if let (Some(a), Some(b)) = (sa, sb) {
+            if a.support == support::HELD {
+                hold_one_way(&mut side, support::one_way(a, b, c.normal, gravity));
+            }
+        }
+    }
+    Some(side)
+}
+
+/// Make `side` one-way as `one_way` says: the holding side's inverse mass and inertia
+/// read as zero in the contact's rows.
+#[inline(never)]
+fn hold_one_way(side: &mut Sides<'_, '_>, one_way: OneWay) {
+    match one_way {
+        OneWay::HoldsA => (side.m_a, side.i_a) = (0.0, Mat3::ZERO),
+        OneWay::HoldsB => (side.m_b, side.i_b) = (0.0, Mat3::ZERO),
+        OneWay::Neither => return,
+    }
+    side.one_way = true;
 }
 
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
@@ -450,10 +480,15 @@ pub(crate) fn prepare<const N: usize>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
+    one_way_gravity: Option<Vec3>,
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
-    let Some(side) = sides(c, bodies, solver_bodies, solver_index) else {
+    let side = match one_way_gravity {
+        Some(g) => sides::<N, true>(c, bodies, solver_bodies, solver_index, g),
+        None => sides::<N, false>(c, bodies, solver_bodies, solver_index, Vec3::ZERO),
+    };
+    let Some(side) = side else {
         return false;
     };
     let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
@@ -462,7 +497,10 @@ pub(crate) fn prepare<const N: usize>(
     let n = c.normal;
     let t1 = n.any_perpendicular();
     let t2 = n.cross(t1);
-    let rigid_partner = body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic;
+    // Twice the stiffness against a body that does not respond (static, kinematic, or
+    // holding this one up one-way).
+    let rigid_partner =
+        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.one_way;
     let center_a = body_a.world_center();
     let center_b = body_b.world_center();
     let rot_a = sa.map(|s| s.rot);

@@ -14,6 +14,7 @@ pub mod query;
 pub(crate) mod sleep;
 pub mod snapshot;
 pub(crate) mod solver;
+pub(crate) mod support;
 pub(crate) mod wide;
 
 pub use pool::BodyHandle;

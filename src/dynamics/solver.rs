@@ -9,6 +9,9 @@
 //!             inertia, the per-sub-step velocity increment of gravity and forces);
 //!             static and sleeping bodies have no entry: they read as zero velocity and
 //!             infinite mass
+//! support     in a step where two touching moving bodies differ 10-fold in mass, the
+//!             islands the ground holds up: there a contact under a far heavier body
+//!             is one-way, its lighter support read as infinite mass (`support.rs`)
 //! prepare     the rows of every manifold, four manifolds at a time into their group's
 //!             lanes (`wide/prepare.rs`): lever arms, Jacobians and effective masses,
 //!             the separation s0, the closing speed before the solve; dynamic–dynamic
@@ -42,6 +45,7 @@ use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::contact_solver;
 use super::pool::Pool;
+use super::support;
 use super::wide::{self, WideStore};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Quat, Vec3};
@@ -80,6 +84,10 @@ pub(crate) struct SolverBody {
     pub slot: u32,
     /// Bit `c` set: a contact of colour `c` moves this body (`wide.rs`).
     pub colours: u32,
+    /// [`support::HELD`] when the body's island touches a body that does not move, in a
+    /// step with a heavy contact; else [`support::FREE`] (`support.rs`). A union-find
+    /// entry while the islands are built.
+    pub support: u32,
 }
 
 impl SolverBody {
@@ -98,6 +106,7 @@ impl SolverBody {
         projected: 0.0,
         slot: NONE,
         colours: 0,
+        support: support::FREE,
     };
 }
 
@@ -159,8 +168,8 @@ pub(crate) fn solve<const N: usize, const C: usize>(
             contact_solver::wake_touched_sleepers(c, bodies, cfg.dt);
         }
     }
-    gather(solver, bodies, cfg, h);
-    plan(solver, contacts, bodies, scratch, cfg);
+    let masses_differ = gather(solver, bodies, cfg, h);
+    plan(solver, contacts, bodies, scratch, masses_differ, cfg);
     let (store, sbodies) = (&mut solver.store, &mut solver.bodies);
     bounce(store, sbodies, contacts, cfg);
     let inv_h = 1.0 / h;
@@ -197,14 +206,20 @@ pub(crate) fn solve<const N: usize, const C: usize>(
 
 /// Colour the contacts that push (`wide.rs`), pack them four to a group in colour
 /// order, and prepare each into its lane. `scratch` holds `(colour, contact index)`.
+/// With `masses_differ` (from [`gather`]), look for a heavy contact first and, if there
+/// is one, mark the islands the ground holds up (`support.rs`).
 fn plan<const N: usize, const C: usize>(
     solver: &mut Solver<N, C>,
     contacts: &[Contact],
     bodies: &Pool<Body<'_>, N>,
     scratch: &mut HVec<(u32, u32), C>,
+    masses_differ: bool,
     cfg: &WorldConfig,
 ) {
     scratch.clear();
+    // Whether two moving bodies of very different masses touch (`support.rs`): only
+    // looked for when the lightest and heaviest moving bodies differ that much.
+    let mut heavy = false;
     // Visit order: contacts between two dynamic bodies first, then those against
     // static, kinematic or sleeping bodies; within each, in the order of a fixed hash of
     // the pair. Colouring in key order gives a regular pattern on regular scenes (all
@@ -226,6 +241,11 @@ fn plan<const N: usize, const C: usize>(
         if !moves(ia) && !moves(ib) {
             continue;
         }
+        if masses_differ && !heavy {
+            let mass = |i: u32| solver.bodies.get(i as usize).map_or(0.0, |s| s.inv_mass);
+            let (m_a, m_b) = (mass(ia), mass(ib));
+            heavy = m_a > 0.0 && m_b > 0.0 && support::heavy_pair(m_a, m_b);
+        }
         let class = u32::from(contact_solver::has_rigid_partner(c, bodies)) << 31;
         // Part contacts of one pair differ by `sub` (0 for a convex pair: its own key).
         let sub = u64::from(c.sub).wrapping_mul(0x9e37_79b9_7f4a_7c15);
@@ -235,6 +255,10 @@ fn plan<const N: usize, const C: usize>(
     }
     // Unique second components: an unstable sort is deterministic.
     crate::sort::sort_pairs(scratch);
+    // Which islands the ground holds up, where a body may rest on one far lighter.
+    if heavy {
+        support::mark_supported(&mut solver.bodies, &solver.index, contacts, scratch);
+    }
     // Colour in rank (visit) order.
     let mut count = [0u32; wide::COLORS + 1];
     for entry in scratch.iter_mut() {
@@ -274,8 +298,15 @@ fn plan<const N: usize, const C: usize>(
     let softness = contact_solver::Softness::for_contacts(cfg);
     let (sb, si) = (&solver.bodies, &solver.index);
     let mut prepare = |g: usize, batch: &[u32; 4]| {
-        if let Some(mut group) = store.group(g) {
-            wide::prepare_group(&mut group, batch, contacts, bodies, sb, si, &softness, cfg);
+        let Some(mut group) = store.group(g) else {
+            return;
+        };
+        let group = &mut group;
+        // One-way contacts only in a step with a heavy contact (`support.rs`).
+        if heavy {
+            wide::prepare_group::<N, true>(group, batch, contacts, bodies, sb, si, &softness, cfg);
+        } else {
+            wide::prepare_group::<N, false>(group, batch, contacts, bodies, sb, si, &softness, cfg);
         }
     };
     for &(colour, ci) in scratch.iter() {
@@ -435,13 +466,17 @@ fn restitution_and_store<const C: usize>(
 }
 
 /// Copy the awake dynamic and kinematic bodies into `solver.bodies` (slot order) and
-/// fill the index map; remember each body's pose at the step start (`pose0`).
+/// fill the index map; remember each body's pose at the step start (`pose0`). Returns
+/// whether the lightest and heaviest awake dynamic bodies differ by
+/// `support::HEAVY_RATIO` or more (else no contact can be one-way).
 fn gather<const N: usize, const C: usize>(
     solver: &mut Solver<N, C>,
     bodies: &mut Pool<Body<'_>, N>,
     cfg: &WorldConfig,
     h: f32,
-) {
+) -> bool {
+    // Inverse masses (1/kg) of the lightest and the heaviest awake dynamic body.
+    let (mut lightest, mut heaviest) = (0.0f32, f32::INFINITY);
     solver.bodies.clear();
     for e in solver.index.iter_mut() {
         *e = NONE;
@@ -463,6 +498,8 @@ fn gather<const N: usize, const C: usize>(
             ..SolverBody::ZERO
         };
         if dynamic {
+            lightest = scalar::max(lightest, b.inv_mass);
+            heaviest = scalar::min(heaviest, b.inv_mass);
             sb.inv_mass = b.inv_mass;
             sb.inv_inertia = b.inv_inertia_world;
             sb.dv = (cfg.gravity + b.force * b.inv_mass) * h;
@@ -483,6 +520,7 @@ fn gather<const N: usize, const C: usize>(
             }
         }
     }
+    support::masses_differ(lightest, heaviest)
 }
 
 /// `v += dv`, `ω += dω`, damping, speed limits, for every dynamic solver body.
@@ -674,6 +712,13 @@ mod tests {
                 .velocity(Vec3::new(-1.0, 0.0, 0.0)),
         )
         .unwrap();
+        // A heavy box on the first column: one-way lanes (`support.rs`).
+        w.add(
+            BodyDesc::dynamic(cube)
+                .position(Vec3::new(-2.0, 3.53, 0.0))
+                .density(1.0e6),
+        )
+        .unwrap();
         w
     }
 
@@ -685,9 +730,88 @@ mod tests {
         let mut w = world.clone();
         let cfg = w.config;
         let h = cfg.substep();
-        gather(&mut w.solver, &mut w.bodies, &cfg, h);
-        plan(&mut w.solver, &w.contacts, &w.bodies, &mut w.pairs, &cfg);
+        let differ = gather(&mut w.solver, &mut w.bodies, &cfg, h);
+        plan(
+            &mut w.solver,
+            &w.contacts,
+            &w.bodies,
+            &mut w.pairs,
+            differ,
+            &cfg,
+        );
         (w, cfg, h)
+    }
+
+    /// Support marks follow islands: a column of five boxes on the ground under a heavy
+    /// box is held up (and the heavy box's contact is one-way), a box in flight is not,
+    /// and a world without a heavy contact marks nothing.
+    #[test]
+    fn support_marks_the_islands_the_ground_holds_up() {
+        on_a_big_stack(check_support_marks);
+    }
+
+    fn check_support_marks() {
+        let build = |density: f32| {
+            let mut w: World<64, 512, 64> = World::new();
+            let ground = Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap();
+            w.add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+                .unwrap();
+            let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+            let column: [crate::BodyHandle; 5] = core::array::from_fn(|i| {
+                let d = if i == 4 { density } else { 1000.0 };
+                let at = Vec3::new(0.0, 0.5 + i as f32, 0.0);
+                w.add(BodyDesc::dynamic(cube).position(at).density(d))
+                    .unwrap()
+            });
+            // Two boxes touching in flight: an island nothing holds up.
+            let flying = w
+                .add(BodyDesc::dynamic(cube).position(Vec3::new(5.0, 5.0, 0.0)))
+                .unwrap();
+            w.add(BodyDesc::dynamic(cube).position(Vec3::new(5.0, 6.0, 0.0)))
+                .unwrap();
+            w.step();
+            (w, column, flying)
+        };
+        let support = |w: &World<'static, 64, 512, 64>, h: crate::BodyHandle| {
+            w.solver.body_of_slot(h.index).map(|s| s.support).unwrap()
+        };
+        let (world, column, flying) = build(1.0e6);
+        let (mut w, _, _) = planned(&world);
+        for (i, h) in column.iter().enumerate() {
+            assert_eq!(support(&w, *h), support::HELD, "box {i}");
+        }
+        assert_eq!(support(&w, flying), support::FREE);
+        // The heavy box's contact: one-way (the lane's inverse mass of the support is 0).
+        let (top, heavy) = (column[3].index, column[4].index);
+        let mut seen = 0;
+        let (store, contacts) = (&mut w.solver.store, &w.contacts);
+        for g in 0..store.groups as usize {
+            let group = store.group(g).unwrap();
+            for l in 0..4 {
+                let k = group.load_lane(l, contacts);
+                if k.contact == NONE {
+                    continue;
+                }
+                let (ma, mb) = (k.inv_mass_a, k.inv_mass_b);
+                if (k.slot_a, k.slot_b) == (top, heavy) {
+                    assert!(ma == 0.0 && mb > 0.0, "{ma} {mb}");
+                    seen += 1;
+                } else if (k.slot_a, k.slot_b) == (heavy, top) {
+                    assert!(mb == 0.0 && ma > 0.0, "{ma} {mb}");
+                    seen += 1;
+                } else {
+                    assert!(k.slot_a == 0 || ma > 0.0, "{k:?}");
+                    assert!(k.slot_b == 0 || mb > 0.0, "{k:?}");
+                }
+            }
+        }
+        assert_eq!(seen, 1);
+        // Equal densities: no marks at all.
+        let (world, column, _) = build(1000.0);
+        let (w, _, _) = planned(&world);
+        for h in column {
+            assert_eq!(support(&w, h), support::FREE);
+        }
     }
 
     /// Run `f` on a thread with a 64 MiB stack: worlds, their clones and the stores are
@@ -727,8 +851,12 @@ mod tests {
                         }
                         let c = &w.contacts[ci as usize];
                         let (sb, si) = (&w.solver.bodies, &w.solver.index);
+                        // Gravity for one-way contacts wherever some island is held
+                        // up (the same lanes as in the step with a heavy contact).
+                        let held = sb.iter().any(|b| b.support == support::HELD);
+                        let under = held.then_some(cfg.gravity);
                         assert!(contact_solver::prepare(
-                            c, ci, &w.bodies, sb, si, &softness, &cfg, &mut k
+                            c, ci, &w.bodies, sb, si, &softness, under, &cfg, &mut k
                         ));
                         group.store_lane(l, &k);
                         lanes += 1;

@@ -97,7 +97,7 @@ struct Inputs {
 /// Prepare the contacts `lanes` (contact indices, [`NONE`] for a lane without one) into
 /// `group`: per lane exactly `contact_solver::prepare` followed by `Group::store_lane`.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn prepare_group<const N: usize>(
+pub(crate) fn prepare_group<const N: usize, const ONE_WAY: bool>(
     group: &mut Group<'_>,
     lanes: &[u32; 4],
     contacts: &[Contact],
@@ -113,7 +113,7 @@ pub(crate) fn prepare_group<const N: usize>(
     let mut lane = |l: usize, ci: u32| {
         if let Some(c) = contacts.get(ci as usize) {
             let (b, sb, si) = (bodies, solver_bodies, solver_index);
-            gather_lane(group, &mut x, l, ci, c, b, sb, si, softness);
+            gather_lane::<N, ONE_WAY>(group, &mut x, l, ci, c, b, sb, si, softness, cfg.gravity);
         }
     };
     lane(0, c0);
@@ -130,7 +130,7 @@ pub(crate) fn prepare_group<const N: usize>(
 /// values the rows copy as they are (the softness too).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn gather_lane<const N: usize>(
+fn gather_lane<const N: usize, const ONE_WAY: bool>(
     group: &mut Group<'_>,
     x: &mut Inputs,
     l: usize,
@@ -140,8 +140,9 @@ fn gather_lane<const N: usize>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
+    gravity: Vec3,
 ) {
-    let Some(side) = sides(c, bodies, solver_bodies, solver_index) else {
+    let Some(side) = sides::<N, ONE_WAY>(c, bodies, solver_bodies, solver_index, gravity) else {
         return;
     };
     let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
@@ -213,8 +214,10 @@ fn gather_lane<const N: usize>(
     set_lane(q0, MU_S, l, m.static_friction);
     set_lane(q0, MU_K, l, m.kinetic_friction);
     set_lane(q0, RESTITUTION, l, m.restitution);
-    // Twice the stiffness against a body that does not respond (static or kinematic).
-    let rigid_partner = body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic;
+    // Twice the stiffness against a body that does not respond (static, kinematic, or
+    // holding this one up one-way).
+    let rigid_partner =
+        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.one_way;
     let soft = if rigid_partner {
         softness[1]
     } else {

@@ -1,0 +1,354 @@
+//! Part of stage 7: which body holds which up, and one-way contacts under heavy bodies
+//! (a form of shock propagation: Guendelman, Bridson and Fedkiw, "Nonconvex rigid bodies
+//! with stacking", 2003).
+//!
+//! An iterative solve passes load down a stack one contact at a time: each visit of the
+//! contact under a body of mass `M` resting on a body of mass `m` moves about `m · v` of
+//! impulse, so a box 1000 times as heavy as the column under it needs about a thousand
+//! iterations per step to be held, and soft contacts sag by `M g / (m ω²)` under it (the
+//! effective mass of the contact is close to the light body's). With a few iterations the
+//! heavy box falls through the column and the column buckles.
+//!
+//! Where a body rests on one at least [`HEAVY_RATIO`] times lighter, carom makes that
+//! contact one-way: the lower, lighter body keeps its velocity in the contact's rows (its
+//! inverse mass and inertia read as zero there, as for a static body), and the heavy
+//! body is stopped by it as by a floor that moves. The lighter body then carries only
+//! the load of what rests on it besides, the column stays as stiff as a stack of equal
+//! boxes, and the heavy box sags by its own `g / ω²`. The ground under the column is told
+//! less than the whole weight: the price of the shortcut, and why it is kept to mass
+//! ratios an iterative solve cannot carry.
+//!
+//! "Rests on" needs all of:
+//!
+//! - **support**: the lighter body is joined to a body that does not move in the solve
+//!   (static, kinematic or sleeping) by a chain of contacts between moving bodies: its
+//!   island touches the ground. A light body that nothing holds (in flight, or in a pile
+//!   in free fall) is pushed as usual, and a heavy body cannot gain speed from it;
+//! - **geometry**: the normal from the lighter body to the heavy one points within 60° of
+//!   up (against gravity). A heavy body pushing a light one sideways pushes it as usual;
+//! - **rest**: the lighter body does not move towards the heavy one faster than
+//!   [`RESTING_RISE`] at the step's start, so a light body thrown up into a heavy one
+//!   bounces off it rather than lifting it at its own speed.
+//!
+//! Support is only worked out in a step where some contact joins two moving bodies of
+//! mass ratio [`HEAVY_RATIO`] or more (the solver notices while it lists the contacts):
+//! union-find over the contacts between moving bodies, as the sleep stage builds its
+//! islands, then a mark on every island that touches a body that does not move. In any
+//! other step every body is [`FREE`] and no contact is one-way.
+//!
+//! The same inverse masses serve every pass over the contact this step: warm start, soft
+//! and relax iterations, the restitution pass and projection.
+
+use super::contact::Contact;
+use super::solver::{SolverBody, NONE};
+use crate::math::Vec3;
+
+/// The mass ratio from which a contact under a heavy body is one-way (module docs).
+/// Box2D's soft step holds stacks up to ratios of about 10 to 1 without help; carom's
+/// holds a wall pyramid under a box 300 times as dense, but a column of five boxes
+/// under a box 100 times as dense buckles sideways.
+pub(crate) const HEAVY_RATIO: f32 = 10.0;
+
+/// A solver body whose island does not touch a body that does not move (and every
+/// body in a step without a heavy contact).
+pub(crate) const FREE: u32 = u32::MAX;
+
+/// A solver body whose island touches a body that does not move: it can hold a heavier
+/// one up.
+pub(crate) const HELD: u32 = u32::MAX - 1;
+
+/// Bit of a root's entry, while the islands are built, that marks an island touching a
+/// body that does not move. Solver indices are far below it.
+const TOUCHES_GROUND: u32 = 1 << 31;
+
+/// `cos² 60°`: a one-way contact's normal is within 60° of up.
+const UPRIGHT_COS2: f32 = 0.25;
+
+/// The fastest the lighter body may move towards the heavy one along the normal at the
+/// step's start (m/s) for the contact to be one-way: a light body thrown up into a heavy
+/// one must not lift it at its own speed (three times the speed gravity adds in a
+/// 1/60 s step; a resting support moves far slower).
+pub(crate) const RESTING_RISE: f32 = 0.5;
+
+/// Which side of a contact keeps its velocity (reads as infinite mass) in its rows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum OneWay {
+    /// Both sides respond (every contact but those under a heavy body).
+    Neither,
+    /// Body A is the lighter support below B.
+    HoldsA,
+    /// Body B is the lighter support below A.
+    HoldsB,
+}
+
+/// Whether the solver body `i` moves in the solve (a dynamic body with an entry).
+#[inline]
+fn moves(bodies: &[SolverBody], i: u32) -> bool {
+    bodies.get(i as usize).is_some_and(|s| s.inv_mass > 0.0)
+}
+
+/// Whether one of two moving bodies (inverse masses in 1/kg) weighs at least
+/// [`HEAVY_RATIO`] times the other: the solver's trigger for [`mark_supported`].
+#[inline]
+pub(crate) fn heavy_pair(inv_mass_a: f32, inv_mass_b: f32) -> bool {
+    inv_mass_a >= HEAVY_RATIO * inv_mass_b || inv_mass_b >= HEAVY_RATIO * inv_mass_a
+}
+
+/// Whether bodies of inverse masses `lightest` (the largest, 1/kg) and `heaviest` (the
+/// smallest) differ by [`HEAVY_RATIO`] or more: when the lightest and the heaviest
+/// moving bodies do not, no contact can be heavy and the solver does not look for one.
+/// False for no body (`0` and `∞`).
+#[inline]
+pub(crate) fn masses_differ(lightest: f32, heaviest: f32) -> bool {
+    lightest >= HEAVY_RATIO * heaviest
+}
+
+/// Mark every moving solver body [`HELD`] or [`FREE`] (module docs) from the contacts
+/// `listed` (`(_, contact index)` entries of the contacts that push); `index` maps pool
+/// slots to solver bodies. Each body's `support` field is its union-find entry while
+/// the islands are built: the parent's index, always smaller than the body's own (the
+/// root of a union is the smaller index, and path halving only moves a body to a
+/// smaller ancestor), so one pass in index order finds every root already resolved.
+/// Integer work in the listed order: the same marks on every target.
+pub(crate) fn mark_supported(
+    bodies: &mut [SolverBody],
+    index: &[u32],
+    contacts: &[Contact],
+    listed: &[(u32, u32)],
+) {
+    for (i, b) in bodies.iter_mut().enumerate() {
+        b.support = i as u32;
+    }
+    let ends = |ci: u32| {
+        contacts.get(ci as usize).map(|c| {
+            let side = |slot: u32| index.get(slot as usize).copied().unwrap_or(NONE);
+            (side(c.a), side(c.b))
+        })
+    };
+    for &(_, ci) in listed {
+        let Some((a, b)) = ends(ci) else { continue };
+        match (moves(bodies, a), moves(bodies, b)) {
+            (true, true) => union(bodies, a, b),
+            (true, false) => mark_root(bodies, a),
+            (false, true) => mark_root(bodies, b),
+            (false, false) => {}
+        }
+    }
+    for i in 0..bodies.len() {
+        let entry = entry(bodies, i as u32);
+        let parent = entry & !TOUCHES_GROUND;
+        let resolved = if parent == i as u32 {
+            if entry & TOUCHES_GROUND != 0 {
+                HELD
+            } else {
+                FREE
+            }
+        } else {
+            // The parent is smaller, so already resolved to HELD or FREE.
+            self::entry(bodies, parent)
+        };
+        if let Some(b) = bodies.get_mut(i) {
+            b.support = resolved;
+        }
+    }
+}
+
+/// Body `i`'s union-find entry (its parent, with [`TOUCHES_GROUND`] on a marked root).
+#[inline]
+fn entry(bodies: &[SolverBody], i: u32) -> u32 {
+    bodies.get(i as usize).map_or(i, |s| s.support)
+}
+
+/// Set body `i`'s entry.
+#[inline]
+fn set_entry(bodies: &mut [SolverBody], i: u32, e: u32) {
+    if let Some(s) = bodies.get_mut(i as usize) {
+        s.support = e;
+    }
+}
+
+/// The root of body `i`'s island, halving the path on the way (each visited body is
+/// moved to its grandparent, a smaller index).
+fn find(bodies: &mut [SolverBody], mut i: u32) -> u32 {
+    // Each step moves to a smaller index: at most `i` steps.
+    for _ in 0..=bodies.len() {
+        let parent = entry(bodies, i) & !TOUCHES_GROUND;
+        if parent == i {
+            return i;
+        }
+        let grand = entry(bodies, parent) & !TOUCHES_GROUND;
+        if grand != parent {
+            // `i` is not a root: its entry carries no mark.
+            set_entry(bodies, i, grand);
+        }
+        i = grand;
+    }
+    i
+}
+
+/// Join the islands of bodies `a` and `b`: the smaller root stays root and keeps the
+/// mark of either.
+fn union(bodies: &mut [SolverBody], a: u32, b: u32) {
+    let (ra, rb) = (find(bodies, a), find(bodies, b));
+    if ra == rb {
+        return;
+    }
+    let (root, child) = if ra < rb { (ra, rb) } else { (rb, ra) };
+    let mark = (entry(bodies, root) | entry(bodies, child)) & TOUCHES_GROUND;
+    set_entry(bodies, root, root | mark);
+    set_entry(bodies, child, root);
+}
+
+/// Mark the island of body `i` as touching a body that does not move.
+fn mark_root(bodies: &mut [SolverBody], i: u32) {
+    let r = find(bodies, i);
+    set_entry(bodies, r, r | TOUCHES_GROUND);
+}
+
+/// Which side of a contact with normal `n` (from A to B) between the moving solver
+/// bodies `a` and `b` holds the other up one-way (module docs), under `gravity` (m/s²).
+/// Out of line: the solver calls it only for contacts in an island marked [`HELD`].
+#[inline(never)]
+pub(crate) fn one_way(a: &SolverBody, b: &SolverBody, n: Vec3, gravity: Vec3) -> OneWay {
+    // One island (they touch): both HELD or both FREE.
+    if a.support != HELD || a.inv_mass <= 0.0 || b.inv_mass <= 0.0 {
+        return OneWay::Neither;
+    }
+    // n · up, with up = −g / |g|, compared against cos 60° without a square root.
+    let rise = -n.dot(gravity);
+    let steep = rise * rise >= UPRIGHT_COS2 * gravity.dot(gravity);
+    if !steep {
+        return OneWay::Neither;
+    }
+    // The support's speed towards the other body along n (from A to B).
+    if rise > 0.0 && a.inv_mass >= HEAVY_RATIO * b.inv_mass && a.v.dot(n) <= RESTING_RISE {
+        OneWay::HoldsA
+    } else if rise < 0.0 && b.inv_mass >= HEAVY_RATIO * a.inv_mass && -b.v.dot(n) <= RESTING_RISE {
+        OneWay::HoldsB
+    } else {
+        OneWay::Neither
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn body(inv_mass: f32, support: u32) -> SolverBody {
+        SolverBody {
+            inv_mass,
+            support,
+            ..SolverBody::ZERO
+        }
+    }
+
+    const G: Vec3 = Vec3::new(0.0, -9.81, 0.0);
+
+    /// Union-find against a brute-force oracle: on random contact graphs (solver bodies
+    /// that move, kinematic ones, slots without a solver body), a body is HELD exactly
+    /// when a breadth-first search over moving–moving contacts reaches a moving body that
+    /// touches one that does not move.
+    #[test]
+    fn support_marks_match_a_breadth_first_search() {
+        let mut rng = crate::rng::SplitMix64::new(5);
+        for round in 0..200 {
+            let slots = 2 + (rng.next_u64() % 40) as usize;
+            // Slot -> solver index: some slots have none (static or sleeping).
+            let mut index = [NONE; 48];
+            let mut bodies = [SolverBody::ZERO; 48];
+            let mut count = 0usize;
+            for entry in index.iter_mut().take(slots) {
+                if !rng.next_u64().is_multiple_of(5) {
+                    *entry = count as u32;
+                    // One in six solver bodies is kinematic (inverse mass 0).
+                    let kinematic = rng.next_u64().is_multiple_of(6);
+                    bodies[count].inv_mass = if kinematic { 0.0 } else { 1.0 };
+                    count += 1;
+                }
+            }
+            let bodies = &mut bodies[..count];
+            let mut contacts = [Contact::default(); 64];
+            let mut listed = [(0u32, 0u32); 64];
+            let pairs = (rng.next_u64() % 64) as usize;
+            for (i, (c, l)) in contacts.iter_mut().zip(listed.iter_mut()).enumerate() {
+                c.a = (rng.next_u64() % slots as u64) as u32;
+                c.b = (rng.next_u64() % slots as u64) as u32;
+                *l = (0, i as u32);
+            }
+            let listed = &listed[..pairs];
+            mark_supported(bodies, &index, &contacts, listed);
+            // The oracle.
+            let moving = |i: u32| bodies.get(i as usize).is_some_and(|b| b.inv_mass > 0.0);
+            let ends = |e: &(u32, u32)| {
+                let c = &contacts[e.1 as usize];
+                (index[c.a as usize], index[c.b as usize])
+            };
+            let mut held = [false; 48];
+            for e in listed {
+                let (a, b) = ends(e);
+                if moving(a) && !moving(b) {
+                    held[a as usize] = true;
+                }
+                if moving(b) && !moving(a) {
+                    held[b as usize] = true;
+                }
+            }
+            for _ in 0..48 {
+                for e in listed {
+                    let (a, b) = ends(e);
+                    if moving(a) && moving(b) && (held[a as usize] || held[b as usize]) {
+                        held[a as usize] = true;
+                        held[b as usize] = true;
+                    }
+                }
+            }
+            for (i, b) in bodies.iter().enumerate() {
+                if b.inv_mass > 0.0 {
+                    let want = if held[i] { HELD } else { FREE };
+                    assert_eq!(b.support, want, "round {round}, body {i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_heavy_body_on_a_supported_light_one_is_held_one_way() {
+        let light = body(1.0, HELD);
+        let heavy = body(0.01, HELD);
+        // Light below (A), heavy above (B): the normal from A to B points up.
+        assert_eq!(one_way(&light, &heavy, Vec3::Y, G), OneWay::HoldsA);
+        // The same contact written the other way round.
+        assert_eq!(one_way(&heavy, &light, -Vec3::Y, G), OneWay::HoldsB);
+    }
+
+    #[test]
+    fn one_way_needs_the_ratio_support_slope_rest_and_gravity() {
+        let light = body(1.0, HELD);
+        let heavy = body(0.01, HELD);
+        // Ratio just under HEAVY_RATIO: two-way.
+        let not_heavy = body(1.0 / (HEAVY_RATIO * 0.99), HELD);
+        assert_eq!(one_way(&light, &not_heavy, Vec3::Y, G), OneWay::Neither);
+        // Neither body held up by the ground: two-way.
+        let (floating, falling) = (body(1.0, FREE), body(0.01, FREE));
+        assert_eq!(one_way(&floating, &falling, Vec3::Y, G), OneWay::Neither);
+        // Light above heavy: two-way.
+        assert_eq!(one_way(&heavy, &light, Vec3::Y, G), OneWay::Neither);
+        let at_61 = Vec3::new(libm::sinf(1.065), libm::cosf(1.065), 0.0);
+        let at_59 = Vec3::new(libm::sinf(1.030), libm::cosf(1.030), 0.0);
+        assert_eq!(one_way(&light, &heavy, at_61, G), OneWay::Neither);
+        assert_eq!(one_way(&light, &heavy, at_59, G), OneWay::HoldsA);
+        assert_eq!(one_way(&light, &heavy, -Vec3::Y, G), OneWay::Neither);
+        // No gravity, no up: two-way.
+        assert_eq!(
+            one_way(&light, &heavy, Vec3::Y, Vec3::ZERO),
+            OneWay::Neither
+        );
+        // The light body rising into the heavy one faster than RESTING_RISE: two-way.
+        let rising = SolverBody {
+            v: Vec3::new(0.0, RESTING_RISE * 1.01, 0.0),
+            ..light
+        };
+        assert_eq!(one_way(&rising, &heavy, Vec3::Y, G), OneWay::Neither);
+        assert_eq!(one_way(&heavy, &rising, -Vec3::Y, G), OneWay::Neither);
+    }
+}
