@@ -148,6 +148,19 @@ fn heavy_box_on_five_boxes_sinks_under_5_cm() {
     assert!(Vec3::new(p.x, 0.0, p.z).length() < 0.01, "slid to {p:?}");
 }
 
+/// Just under the one-way ratio (`support::HEAVY_RATIO`, 20) the column holds two-way:
+/// a box 19 times as dense as the five boxes under it sinks under 5 cm (about 3 cm: the
+/// soft contacts' sag grows with the load) and stays within 5 mm of its place sideways.
+/// (Two-way, 1:30 sinks 4.5 cm, 1:50 8 cm, and 1:100 topples.)
+#[test]
+fn heavy_box_just_under_the_one_way_ratio_holds_two_way() {
+    let (p, lowest) = heavy_on_five_boxes(awake(), 19.0);
+    eprintln!("1:19 on five boxes: heavy box at {p:?}, lowest {lowest}");
+    assert!(5.5 - lowest < 0.05, "sank to {lowest}");
+    assert!(5.5 - lowest > 0.01, "one-way already? lowest {lowest}");
+    assert!(Vec3::new(p.x, 0.0, p.z).length() < 0.005, "slid to {p:?}");
+}
+
 /// The same column under a box 100 times as dense stands straight. (Before the one-way
 /// contact it sank 11 cm and buckled sideways, every box tilting the same way a little
 /// more each step, and fell near step 400; rapier3d 0.36.1 holds it with 26 cm sunk
@@ -640,3 +653,4 @@ fn the_boxes_scene_comes_to_rest_and_sleeps() {
         );
     });
 }
+

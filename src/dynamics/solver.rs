@@ -9,7 +9,7 @@
 //!             inertia, the per-sub-step velocity increment of gravity and forces);
 //!             static and sleeping bodies have no entry: they read as zero velocity and
 //!             infinite mass
-//! support     in a step where two touching moving bodies differ 10-fold in mass, the
+//! support     in a step where two touching moving bodies differ 20-fold in mass, the
 //!             islands the ground holds up: there a contact under a far heavier body
 //!             is one-way, its lighter support read as infinite mass (`support.rs`)
 //! prepare     the rows of every manifold, four manifolds at a time into their group's
