@@ -267,11 +267,7 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
         }
         if keep {
             if read != write {
-                if let Some(&c) = slots.get(read) {
-                    if let Some(dst) = slots.get_mut(write) {
-                        *dst = c;
-                    }
-                }
+                move_down(slots, read, write);
             }
             write += 1;
         }
@@ -320,6 +316,27 @@ fn listed<const N: usize>(
     Some(())
 }
 
+/// Copy `slots[from]` to `slots[to]` (`to < from`) straight, without a copy on the way
+/// (a contact is a few hundred bytes); nothing when either is out of range.
+#[inline(always)]
+fn move_down(slots: &mut [Contact], from: usize, to: usize) {
+    if let Some((low, high)) = slots.split_at_mut_checked(from) {
+        if let (Some(dst), Some(src)) = (low.get_mut(to), high.first()) {
+            *dst = *src;
+        }
+    }
+}
+
+/// Copy `slots[from]` to `slots[to]` (`to > from`), as [`move_down`].
+#[inline(always)]
+fn move_up(slots: &mut [Contact], from: usize, to: usize) {
+    if let Some((low, high)) = slots.split_at_mut_checked(to) {
+        if let (Some(src), Some(dst)) = (low.get(from), high.first_mut()) {
+            *dst = *src;
+        }
+    }
+}
+
 /// Pass 2, backward: open room for `total` new part contacts and write each record's
 /// first `new_parts` missing ones (the lowest keys), merged with its existing part
 /// contacts in key order. Every contact moves up by the number of new ones below it, so
@@ -342,24 +359,22 @@ fn add_missing<const N: usize, const C: usize>(
     let mut unused = 0u32;
     while read > 0 && write > read {
         read -= 1;
-        let Some(&(mut c)) = slots.get(read) else {
+        write -= 1;
+        move_up(slots, read, write);
+        let Some(c) = slots.get_mut(write) else {
             break;
         };
         let wanted = c.new_parts as usize;
         c.new_parts = 0;
-        write -= 1;
-        if let Some(dst) = slots.get_mut(write) {
-            *dst = c;
-        }
         if !c.is_record() || wanted == 0 {
             continue;
         }
+        let (a, b, material, sensor, key) = (c.a, c.b, c.material, c.sensor, c.key());
         // The same list as pass 1 (nothing changed since).
-        if listed(c.a, c.b, bodies, list, &mut unused).is_none() {
+        if listed(a, b, bodies, list, &mut unused).is_none() {
             continue;
         }
         // The pair's part contacts are `slots[first..read]`.
-        let key = c.key();
         let mut first = read;
         while first > 0 && slots.get(first - 1).is_some_and(|e| e.key() == key) {
             first -= 1;
@@ -380,27 +395,24 @@ fn add_missing<const N: usize, const C: usize>(
         while ei > first || mi > 0 {
             let next_missing = if mi > 0 { missing.get(mi - 1) } else { None };
             let next_existing = if ei > first { slots.get(ei - 1) } else { None };
-            let moved = match (next_missing, next_existing) {
-                (Some(&m), Some(x)) if m < x.sub => Some(*x),
+            let existing_next = match (next_missing, next_existing) {
+                (Some(&m), Some(x)) if m < x.sub => true,
                 (Some(&m), _) => {
                     mi -= 1;
-                    let mut n = Contact::new_pair(c.a, c.b, c.material, c.sensor);
-                    n.sub = m;
                     write -= 1;
                     if let Some(dst) = slots.get_mut(write) {
-                        *dst = n;
+                        *dst = Contact::new_pair(a, b, material, sensor);
+                        dst.sub = m;
                     }
-                    None
+                    false
                 }
-                (None, Some(x)) => Some(*x),
+                (None, Some(_)) => true,
                 (None, None) => break,
             };
-            if let Some(x) = moved {
+            if existing_next {
                 ei -= 1;
                 write -= 1;
-                if let Some(dst) = slots.get_mut(write) {
-                    *dst = x;
-                }
+                move_up(slots, ei, write);
             }
         }
         read = first;
