@@ -653,4 +653,3 @@ fn the_boxes_scene_comes_to_rest_and_sleeps() {
         );
     });
 }
-
