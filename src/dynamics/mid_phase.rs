@@ -670,10 +670,19 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
                 .copied()
                 .unwrap_or_default()
         };
+        // What the choice reads of each point: its depth and its place on A.
+        let mut reads: HVec<(f32, Vec3), { MAX_PAIR_PARTS * 4 }> = HVec::new();
+        for key in &points {
+            let p = point(key);
+            // Cannot fail: one entry per point.
+            let _ = reads.push((p.separation, p.local_a));
+        }
         let mut keep: HVec<ContactPoint, 4> = HVec::new();
-        for key in &choose_four(&points, &point, slop) {
-            // Cannot fail: at most four.
-            let _ = keep.push(point(key));
+        for &i in &choose_four(&reads, slop) {
+            if let Some(key) = points.get(i) {
+                // Cannot fail: at most four.
+                let _ = keep.push(point(key));
+            }
         }
         for &(k, _) in &points {
             if let Some(c) = group.get_mut(usize::from(k)) {
@@ -692,56 +701,47 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
     }
 }
 
-/// The (at most) four points of a patch [`merge_patches`] keeps, as their indices.
-fn choose_four(
-    points: &[(u8, u8)],
-    point: &dyn Fn(&(u8, u8)) -> ContactPoint,
-    slop: f32,
-) -> HVec<(u8, u8), 4> {
-    let mut keep: HVec<(u8, u8), 4> = HVec::new();
+/// The (at most) four points of a patch [`merge_patches`] keeps, as their indices in
+/// `points` (each point's separation and its place in A's frame).
+fn choose_four(points: &[(f32, Vec3)], slop: f32) -> HVec<usize, 4> {
+    let mut keep: HVec<usize, 4> = HVec::new();
     let mut at: HVec<Vec3, 4> = HVec::new();
     let area = |u: Vec3, v: Vec3, w: Vec3| scalar::sqrt((v - u).cross(w - u).length_squared());
     // The first point: the one furthest from the points' centroid among those within a
     // slop of the deepest (on a flat patch, a corner of the footprint).
     let mut deepest = f32::INFINITY;
     let mut sum = Vec3::ZERO;
-    for key in points {
-        let p = point(key);
-        deepest = scalar::min(deepest, p.separation);
-        sum += p.local_a;
+    for &(separation, x) in points {
+        deepest = scalar::min(deepest, separation);
+        sum += x;
     }
     let centroid = sum * (1.0 / points.len().max(1) as f32);
     for _ in 0..4 {
-        let score = |p: &ContactPoint| -> f32 {
-            let x = p.local_a;
+        let score = |separation: f32, x: Vec3| -> f32 {
             match at.as_slice() {
-                [] if p.separation <= deepest + slop => (x - centroid).length_squared(),
+                [] if separation <= deepest + slop => (x - centroid).length_squared(),
                 [] => f32::NEG_INFINITY,
                 [x1] => (x - *x1).length_squared(),
                 [x1, x2] => (*x2 - *x1).cross(x - *x1).length_squared(),
                 [x1, x2, x3, ..] => area(*x1, *x2, x) + area(*x2, *x3, x) + area(*x3, *x1, x),
             }
         };
-        let mut best: Option<((u8, u8), Vec3, f32)> = None;
-        for key in points {
-            let p = point(key);
+        let mut best: Option<(usize, Vec3, f32)> = None;
+        for (i, &(separation, x)) in points.iter().enumerate() {
             // A point on top of a kept one adds nothing (nor does a kept one).
-            if at
-                .iter()
-                .any(|k| (p.local_a - *k).length_squared() <= slop * slop)
-            {
+            if at.iter().any(|k| (x - *k).length_squared() <= slop * slop) {
                 continue;
             }
-            let v = score(&p);
+            let v = score(separation, x);
             if best.is_none_or(|(_, _, b)| v > b) {
-                best = Some((*key, p.local_a, v));
+                best = Some((i, x, v));
             }
         }
-        let Some((key, x, _)) = best else {
+        let Some((i, x, _)) = best else {
             break;
         };
         // Cannot fail: four rounds.
-        let _ = keep.push(key);
+        let _ = keep.push(i);
         let _ = at.push(x);
     }
     keep
