@@ -121,7 +121,7 @@ use super::contact::Contact;
 use super::pool::Pool;
 use super::solver::NONE;
 use super::solver::{is_active, is_moving_kinematic, SolverBody};
-use super::support::{self, OneWay};
+use super::support::{self, Held};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Vec3};
 
@@ -382,9 +382,9 @@ pub(crate) struct Sides<'s, 'a> {
     pub m_b: f32,
     /// B's world inverse inertia.
     pub i_b: Mat3,
-    /// One side holds the other up one-way (`support.rs`): its mass and inertia above
+    /// One side holds up a far heavier other (`support.rs`): its mass and inertia above
     /// read as zero.
-    pub one_way: bool,
+    pub capped: bool,
 }
 
 /// A contact whose normal line passes through the centre of mass of every body it can
@@ -406,10 +406,11 @@ pub(crate) fn torque_free(side: &Sides<'_, '_>) -> bool {
 }
 
 /// The [`Sides`] of contact `c`, or `None` when it does not push: a sensor, no point, a
-/// missing body, or no moving dynamic body. `ONE_WAY` in a step where contacts may be
-/// one-way under `gravity` (m/s², `support.rs`); the other steps run without the test.
+/// missing body, or no moving dynamic body. `CAPPED` in a step where a contact's mass
+/// ratio may be capped, under `gravity` (m/s², `support.rs`); the other steps run without
+/// the test.
 #[inline(always)]
-pub(crate) fn sides<'s, 'a, const N: usize, const ONE_WAY: bool>(
+pub(crate) fn sides<'s, 'a, const N: usize, const CAPPED: bool>(
     c: &Contact,
     bodies: &'s Pool<Body<'a>, N>,
     solver_bodies: &'s [SolverBody],
@@ -442,30 +443,37 @@ pub(crate) fn sides<'s, 'a, const N: usize, const ONE_WAY: bool>(
         i_a,
         m_b,
         i_b,
-        one_way: false,
+        capped: false,
     };
     // Under a heavy body, the lighter support keeps its velocity (`support.rs`); only
     // in an island the ground holds up, in a step with a heavy contact.
-    if ONE_WAY {
+    if CAPPED {
         if let (Some(a), Some(b)) = (sa, sb) {
             if a.support == support::HELD {
-                hold_one_way(&mut side, support::one_way(a, b, c.normal, gravity));
+                cap_support_mass(&mut side, support::held_side(a, b, c.normal, gravity));
             }
         }
     }
     Some(side)
 }
 
-/// Make `side` one-way as `one_way` says: the holding side's inverse mass and inertia
-/// read as zero in the contact's rows.
+/// Cap the mass ratio of `side` as `held` says: the holding side's inverse mass and
+/// inertia scaled by `HEAVY_RATIO · m_heavy⁻¹ / m_support⁻¹` (below 1), so that it weighs
+/// `1 / HEAVY_RATIO` of the heavy body in the contact's rows.
 #[inline(never)]
-fn hold_one_way(side: &mut Sides<'_, '_>, one_way: OneWay) {
-    match one_way {
-        OneWay::HoldsA => (side.m_a, side.i_a) = (0.0, Mat3::ZERO),
-        OneWay::HoldsB => (side.m_b, side.i_b) = (0.0, Mat3::ZERO),
-        OneWay::Neither => return,
+fn cap_support_mass(side: &mut Sides<'_, '_>, held: Held) {
+    match held {
+        Held::SupportA => {
+            let s = support::HEAVY_RATIO * side.m_b / side.m_a;
+            (side.m_a, side.i_a) = (side.m_a * s, side.i_a.scale(s));
+        }
+        Held::SupportB => {
+            let s = support::HEAVY_RATIO * side.m_a / side.m_b;
+            (side.m_b, side.i_b) = (side.m_b * s, side.i_b.scale(s));
+        }
+        Held::Neither => return,
     }
-    side.one_way = true;
+    side.capped = true;
 }
 
 /// Fill `k` with the constraint of contact `index`; false when it does not push: a
@@ -498,9 +506,9 @@ pub(crate) fn prepare<const N: usize>(
     let t1 = n.any_perpendicular();
     let t2 = n.cross(t1);
     // Twice the stiffness against a body that does not respond (static, kinematic, or
-    // holding this one up one-way).
+    // holding up this far heavier one).
     let rigid_partner =
-        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.one_way;
+        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.capped;
     let center_a = body_a.world_center();
     let center_b = body_b.world_center();
     let rot_a = sa.map(|s| s.rot);

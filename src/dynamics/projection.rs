@@ -107,13 +107,21 @@ fn project_constraint<const N: usize, const C: usize>(
         if correction >= 0.0 {
             continue;
         }
+        // The constraint's inverse masses: a support under a far heavier body reads
+        // heavier there (`support.rs`), its inertia scaled alike; elsewhere the body's.
         let (m_a, i_a) = if move_a {
-            (a.inv_mass, a.inv_inertia_world)
+            (
+                k.inv_mass_a,
+                a.inv_inertia_world.scale(k.inv_mass_a / a.inv_mass),
+            )
         } else {
             (0.0, Mat3::ZERO)
         };
         let (m_b, i_b) = if move_b {
-            (b.inv_mass, b.inv_inertia_world)
+            (
+                k.inv_mass_b,
+                b.inv_inertia_world.scale(k.inv_mass_b / b.inv_mass),
+            )
         } else {
             (0.0, Mat3::ZERO)
         };

@@ -1,6 +1,7 @@
-//! Part of stage 7: which body holds which up, and one-way contacts under heavy bodies
-//! (a form of shock propagation: Guendelman, Bridson and Fedkiw, "Nonconvex rigid bodies
-//! with stacking", 2003).
+//! Part of stage 7: which body holds which up, and the mass ratio capped at 20 to 1 in
+//! contacts under heavy bodies (in the spirit of shock propagation: Guendelman, Bridson
+//! and Fedkiw, "Nonconvex rigid bodies with stacking", 2003; and of the inverse-mass
+//! scaling some engines offer per contact).
 //!
 //! An iterative solve passes load down a stack one contact at a time: each visit of the
 //! contact under a body of mass `M` resting on a body of mass `m` moves about `m · v` of
@@ -9,14 +10,17 @@
 //! effective mass of the contact is close to the light body's). With a few iterations the
 //! heavy box falls through the column and the column buckles.
 //!
-//! Where a body rests on one at least [`HEAVY_RATIO`] times lighter, carom makes that
-//! contact one-way: the lower, lighter body keeps its velocity in the contact's rows (its
-//! inverse mass and inertia read as zero there, as for a static body), and the heavy
-//! body is stopped by it as by a floor that moves. The lighter body then carries only
-//! the load of what rests on it besides, the column stays as stiff as a stack of equal
-//! boxes, and the heavy box sags by its own `g / ω²`. The ground under the column is told
-//! less than the whole weight: the price of the shortcut, and why it is kept to mass
-//! ratios an iterative solve cannot carry.
+//! Where a body rests on one more than [`HEAVY_RATIO`] (20) times lighter, carom caps the
+//! ratio that contact sees: the lower, lighter body's inverse mass and inertia are scaled
+//! down there so that it weighs a twentieth of the heavy body, in that contact's rows
+//! only. The column then carries what a box 20 times as heavy would put on it, which the
+//! soft step holds (a few centimetres of sag), and the heavy box sags as on a 20-fold
+//! lighter support. The ground under the column is told less than the whole weight: the
+//! price of the shortcut, and why it is kept to ratios an iterative solve cannot carry.
+//! A cap rather than an infinite mass (a one-way contact): a light support kicked up
+//! within the step (squeezed out of a crash) gives the heavy body at most 1/21 of its
+//! speed, where a one-way contact handed it all of it (a crashing pile of boxes 50 times
+//! as dense as their neighbours launched one 1.8 m up).
 //!
 //! "Rests on" needs all of:
 //!
@@ -34,7 +38,7 @@
 //! mass ratio [`HEAVY_RATIO`] or more (the solver notices while it lists the contacts):
 //! union-find over the contacts between moving bodies, as the sleep stage builds its
 //! islands, then a mark on every island that touches a body that does not move. In any
-//! other step every body is [`FREE`] and no contact is one-way.
+//! other step every body is [`FREE`] and no contact is capped.
 //!
 //! The same inverse masses serve every pass over the contact this step: warm start, soft
 //! and relax iterations, the restitution pass and projection.
@@ -43,11 +47,12 @@ use super::contact::Contact;
 use super::solver::{SolverBody, NONE};
 use crate::math::Vec3;
 
-/// The mass ratio from which a contact under a heavy body is one-way (module docs).
-/// Below it the soft step holds a column two-way: a box 19 times as dense as the five
+/// The largest mass ratio a contact under a heavy body sees (module docs), and the ratio
+/// from which the cap applies.
+/// Below it the soft step holds a column as it is: a box 19 times as dense as the five
 /// boxes under it sinks about 3 cm (1:30 would sink 4.5 cm, 1:50 8 cm, and 1:100 topples
 /// the column, `tests/stability.rs`). Kept that high so that ordinary piles of bodies of
-/// mixed sizes stay two-way nearly everywhere.
+/// mixed sizes stay uncapped nearly everywhere.
 pub(crate) const HEAVY_RATIO: f32 = 20.0;
 
 /// A solver body whose island does not touch a body that does not move (and every
@@ -62,24 +67,24 @@ pub(crate) const HELD: u32 = u32::MAX - 1;
 /// body that does not move. Solver indices are far below it.
 const TOUCHES_GROUND: u32 = 1 << 31;
 
-/// `cos² 60°`: a one-way contact's normal is within 60° of up.
+/// `cos² 60°`: a capped contact's normal is within 60° of up.
 const UPRIGHT_COS2: f32 = 0.25;
 
 /// The fastest the lighter body may move towards the heavy one along the normal at the
-/// step's start (m/s) for the contact to be one-way: a light body thrown up into a heavy
+/// step's start (m/s) for the contact to be capped: a light body thrown up into a heavy
 /// one must not lift it at its own speed (three times the speed gravity adds in a
 /// 1/60 s step; a resting support moves far slower).
 pub(crate) const RESTING_RISE: f32 = 0.5;
 
 /// Which side of a contact keeps its velocity (reads as infinite mass) in its rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum OneWay {
+pub(crate) enum Held {
     /// Both sides respond (every contact but those under a heavy body).
     Neither,
     /// Body A is the lighter support below B.
-    HoldsA,
+    SupportA,
     /// Body B is the lighter support below A.
-    HoldsB,
+    SupportB,
 }
 
 /// Whether the solver body `i` moves in the solve (a dynamic body with an entry).
@@ -207,27 +212,28 @@ fn mark_root(bodies: &mut [SolverBody], i: u32) {
 }
 
 /// Which side of a contact with normal `n` (from A to B) between the moving solver
-/// bodies `a` and `b` holds the other up one-way (module docs), under `gravity` (m/s²).
+/// bodies `a` and `b` holds the other up with the ratio capped (module docs), under
+/// `gravity` (m/s²).
 /// Out of line: the solver calls it only for contacts in an island marked [`HELD`].
 #[inline(never)]
-pub(crate) fn one_way(a: &SolverBody, b: &SolverBody, n: Vec3, gravity: Vec3) -> OneWay {
+pub(crate) fn held_side(a: &SolverBody, b: &SolverBody, n: Vec3, gravity: Vec3) -> Held {
     // One island (they touch): both HELD or both FREE.
     if a.support != HELD || a.inv_mass <= 0.0 || b.inv_mass <= 0.0 {
-        return OneWay::Neither;
+        return Held::Neither;
     }
     // n · up, with up = −g / |g|, compared against cos 60° without a square root.
     let rise = -n.dot(gravity);
     let steep = rise * rise >= UPRIGHT_COS2 * gravity.dot(gravity);
     if !steep {
-        return OneWay::Neither;
+        return Held::Neither;
     }
     // The support's speed towards the other body along n (from A to B).
     if rise > 0.0 && a.inv_mass >= HEAVY_RATIO * b.inv_mass && a.v.dot(n) <= RESTING_RISE {
-        OneWay::HoldsA
+        Held::SupportA
     } else if rise < 0.0 && b.inv_mass >= HEAVY_RATIO * a.inv_mass && -b.v.dot(n) <= RESTING_RISE {
-        OneWay::HoldsB
+        Held::SupportB
     } else {
-        OneWay::Neither
+        Held::Neither
     }
 }
 
@@ -313,43 +319,43 @@ mod tests {
     }
 
     #[test]
-    fn a_heavy_body_on_a_supported_light_one_is_held_one_way() {
+    fn a_heavy_body_on_a_supported_light_one_is_held_with_the_ratio_capped() {
         let light = body(1.0, HELD);
         let heavy = body(0.01, HELD);
         // Light below (A), heavy above (B): the normal from A to B points up.
-        assert_eq!(one_way(&light, &heavy, Vec3::Y, G), OneWay::HoldsA);
+        assert_eq!(held_side(&light, &heavy, Vec3::Y, G), Held::SupportA);
         // The same contact written the other way round.
-        assert_eq!(one_way(&heavy, &light, -Vec3::Y, G), OneWay::HoldsB);
+        assert_eq!(held_side(&heavy, &light, -Vec3::Y, G), Held::SupportB);
     }
 
     #[test]
-    fn one_way_needs_the_ratio_support_slope_rest_and_gravity() {
+    fn the_cap_needs_the_ratio_support_slope_rest_and_gravity() {
         let light = body(1.0, HELD);
         let heavy = body(0.01, HELD);
-        // Ratio just under HEAVY_RATIO: two-way.
+        // Ratio just under HEAVY_RATIO: uncapped.
         let not_heavy = body(1.0 / (HEAVY_RATIO * 0.99), HELD);
-        assert_eq!(one_way(&light, &not_heavy, Vec3::Y, G), OneWay::Neither);
-        // Neither body held up by the ground: two-way.
+        assert_eq!(held_side(&light, &not_heavy, Vec3::Y, G), Held::Neither);
+        // Neither body held up by the ground: uncapped.
         let (floating, falling) = (body(1.0, FREE), body(0.01, FREE));
-        assert_eq!(one_way(&floating, &falling, Vec3::Y, G), OneWay::Neither);
-        // Light above heavy: two-way.
-        assert_eq!(one_way(&heavy, &light, Vec3::Y, G), OneWay::Neither);
+        assert_eq!(held_side(&floating, &falling, Vec3::Y, G), Held::Neither);
+        // Light above heavy: uncapped.
+        assert_eq!(held_side(&heavy, &light, Vec3::Y, G), Held::Neither);
         let at_61 = Vec3::new(libm::sinf(1.065), libm::cosf(1.065), 0.0);
         let at_59 = Vec3::new(libm::sinf(1.030), libm::cosf(1.030), 0.0);
-        assert_eq!(one_way(&light, &heavy, at_61, G), OneWay::Neither);
-        assert_eq!(one_way(&light, &heavy, at_59, G), OneWay::HoldsA);
-        assert_eq!(one_way(&light, &heavy, -Vec3::Y, G), OneWay::Neither);
-        // No gravity, no up: two-way.
+        assert_eq!(held_side(&light, &heavy, at_61, G), Held::Neither);
+        assert_eq!(held_side(&light, &heavy, at_59, G), Held::SupportA);
+        assert_eq!(held_side(&light, &heavy, -Vec3::Y, G), Held::Neither);
+        // No gravity, no up: uncapped.
         assert_eq!(
-            one_way(&light, &heavy, Vec3::Y, Vec3::ZERO),
-            OneWay::Neither
+            held_side(&light, &heavy, Vec3::Y, Vec3::ZERO),
+            Held::Neither
         );
-        // The light body rising into the heavy one faster than RESTING_RISE: two-way.
+        // The light body rising into the heavy one faster than RESTING_RISE: uncapped.
         let rising = SolverBody {
             v: Vec3::new(0.0, RESTING_RISE * 1.01, 0.0),
             ..light
         };
-        assert_eq!(one_way(&rising, &heavy, Vec3::Y, G), OneWay::Neither);
-        assert_eq!(one_way(&heavy, &rising, -Vec3::Y, G), OneWay::Neither);
+        assert_eq!(held_side(&rising, &heavy, Vec3::Y, G), Held::Neither);
+        assert_eq!(held_side(&heavy, &rising, -Vec3::Y, G), Held::Neither);
     }
 }

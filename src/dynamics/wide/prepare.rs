@@ -97,7 +97,7 @@ struct Inputs {
 /// Prepare the contacts `lanes` (contact indices, [`NONE`] for a lane without one) into
 /// `group`: per lane exactly `contact_solver::prepare` followed by `Group::store_lane`.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn prepare_group<const N: usize, const ONE_WAY: bool>(
+pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
     group: &mut Group<'_>,
     lanes: &[u32; 4],
     contacts: &[Contact],
@@ -113,7 +113,7 @@ pub(crate) fn prepare_group<const N: usize, const ONE_WAY: bool>(
     let mut lane = |l: usize, ci: u32| {
         if let Some(c) = contacts.get(ci as usize) {
             let (b, sb, si) = (bodies, solver_bodies, solver_index);
-            gather_lane::<N, ONE_WAY>(group, &mut x, l, ci, c, b, sb, si, softness, cfg.gravity);
+            gather_lane::<N, CAPPED>(group, &mut x, l, ci, c, b, sb, si, softness, cfg.gravity);
         }
     };
     lane(0, c0);
@@ -130,7 +130,7 @@ pub(crate) fn prepare_group<const N: usize, const ONE_WAY: bool>(
 /// values the rows copy as they are (the softness too).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn gather_lane<const N: usize, const ONE_WAY: bool>(
+fn gather_lane<const N: usize, const CAPPED: bool>(
     group: &mut Group<'_>,
     x: &mut Inputs,
     l: usize,
@@ -142,7 +142,7 @@ fn gather_lane<const N: usize, const ONE_WAY: bool>(
     softness: &[Softness; 2],
     gravity: Vec3,
 ) {
-    let Some(side) = sides::<N, ONE_WAY>(c, bodies, solver_bodies, solver_index, gravity) else {
+    let Some(side) = sides::<N, CAPPED>(c, bodies, solver_bodies, solver_index, gravity) else {
         return;
     };
     let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
@@ -217,7 +217,7 @@ fn gather_lane<const N: usize, const ONE_WAY: bool>(
     // Twice the stiffness against a body that does not respond (static, kinematic, or
     // holding this one up one-way).
     let rigid_partner =
-        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.one_way;
+        body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.capped;
     let soft = if rigid_partner {
         softness[1]
     } else {
