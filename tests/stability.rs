@@ -571,7 +571,14 @@ fn crash_block(density: fn(usize) -> f32) -> (f64, f64, f32, f32) {
 /// pile gained 4.4 MJ (9 % of its energy) and launched a box 7 m up.
 #[test]
 fn a_crashing_block_of_boxes_gains_no_energy() {
-    let (gain, allowed, highest, top0) = crash_block(|_| 1000.0);
+    crash_gains_no_energy(|_| 1000.0);
+}
+
+/// [`crash_block`] with `density`, checked: the energy rose less than the push-out
+/// allowance after its low, and no box rose 0.5 m above the block's top at the drop.
+fn crash_gains_no_energy(density: fn(usize) -> f32) {
+    let (gain, allowed, highest, top0) = crash_block(density);
+    eprintln!("crash: energy rose {gain:.0} J, allowed {allowed:.0} J, top {highest}");
     assert!(
         gain < allowed,
         "energy rose {gain:.0} J (allowed {allowed:.0} J)"
@@ -590,17 +597,7 @@ fn a_crashing_block_of_boxes_gains_no_energy() {
 /// MJ, as heavy boxes push the light ones they land on out of the way.)
 #[test]
 fn a_crashing_block_of_heavy_and_light_boxes_gains_no_energy() {
-    let (gain, allowed, highest, top0) =
-        crash_block(|i| if i % 3 == 0 { 50_000.0 } else { 1000.0 });
-    eprintln!("mixed densities: energy rose {gain:.0} J, allowed {allowed:.0} J, top {highest}");
-    assert!(
-        gain < allowed,
-        "energy rose {gain:.0} J (allowed {allowed:.0} J)"
-    );
-    assert!(
-        highest < top0 + 0.5,
-        "a box reached y = {highest} (from {top0})"
-    );
+    crash_gains_no_energy(|i| if i % 3 == 0 { 50_000.0 } else { 1000.0 });
 }
 
 /// A column of ten unit boxes dropped as in the `boxes` scene (1.2 m apart, lowest at
