@@ -382,8 +382,8 @@ pub(crate) struct Sides<'s, 'a> {
     pub m_b: f32,
     /// B's world inverse inertia.
     pub i_b: Mat3,
-    /// One side holds up a far heavier other (`support.rs`): its mass and inertia above
-    /// read as zero.
+    /// One side holds up a far heavier other (`support.rs`): its inverse mass and
+    /// inertia above are scaled so that it weighs `1 / HEAVY_RATIO` of the other.
     pub capped: bool,
 }
 
@@ -445,8 +445,9 @@ pub(crate) fn sides<'s, 'a, const N: usize, const CAPPED: bool>(
         i_b,
         capped: false,
     };
-    // Under a heavy body, the lighter support keeps its velocity (`support.rs`); only
-    // in an island the ground holds up, in a step with a heavy contact.
+    // Under a far heavier body, the lighter support weighs a twentieth of it in this
+    // contact (`support.rs`); only in an island the ground holds up, in a step with a
+    // heavy contact.
     if CAPPED {
         if let (Some(a), Some(b)) = (sa, sb) {
             if a.support == support::HELD {
@@ -488,11 +489,11 @@ pub(crate) fn prepare<const N: usize>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
-    one_way_gravity: Option<Vec3>,
+    capped_gravity: Option<Vec3>,
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
-    let side = match one_way_gravity {
+    let side = match capped_gravity {
         Some(g) => sides::<N, true>(c, bodies, solver_bodies, solver_index, g),
         None => sides::<N, false>(c, bodies, solver_bodies, solver_index, Vec3::ZERO),
     };
@@ -505,8 +506,8 @@ pub(crate) fn prepare<const N: usize>(
     let n = c.normal;
     let t1 = n.any_perpendicular();
     let t2 = n.cross(t1);
-    // Twice the stiffness against a body that does not respond (static, kinematic, or
-    // holding up this far heavier one).
+    // Twice the stiffness against a body that does not respond (static or kinematic)
+    // and against a capped support, which gives way a twentieth as much as this body.
     let rigid_partner =
         body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.capped;
     let center_a = body_a.world_center();

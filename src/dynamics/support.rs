@@ -76,10 +76,10 @@ const UPRIGHT_COS2: f32 = 0.25;
 /// 1/60 s step; a resting support moves far slower).
 pub(crate) const RESTING_RISE: f32 = 0.5;
 
-/// Which side of a contact keeps its velocity (reads as infinite mass) in its rows.
+/// Which side of a contact is the lighter support whose mass ratio is capped in its rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Held {
-    /// Both sides respond (every contact but those under a heavy body).
+    /// Neither: the masses as they are (every contact but those under a heavy body).
     Neither,
     /// Body A is the lighter support below B.
     SupportA,

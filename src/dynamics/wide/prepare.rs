@@ -214,8 +214,8 @@ fn gather_lane<const N: usize, const CAPPED: bool>(
     set_lane(q0, MU_S, l, m.static_friction);
     set_lane(q0, MU_K, l, m.kinetic_friction);
     set_lane(q0, RESTITUTION, l, m.restitution);
-    // Twice the stiffness against a body that does not respond (static, kinematic, or
-    // holding this one up one-way).
+    // Twice the stiffness against a body that does not respond (static or kinematic)
+    // and against a capped support, which gives way a twentieth as much as this body.
     let rigid_partner =
         body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.capped;
     let soft = if rigid_partner {
