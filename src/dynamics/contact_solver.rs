@@ -121,7 +121,7 @@ use super::contact::Contact;
 use super::pool::Pool;
 use super::solver::NONE;
 use super::solver::{is_active, is_moving_kinematic, SolverBody};
-use super::support::{self, Held};
+use super::support::{self, Held, Supports};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Mat3, Vec3};
 
@@ -407,7 +407,7 @@ pub(crate) fn torque_free(side: &Sides<'_, '_>) -> bool {
 
 /// The [`Sides`] of contact `c`, or `None` when it does not push: a sensor, no point, a
 /// missing body, or no moving dynamic body. `CAPPED` in a step where a contact's mass
-/// ratio may be capped, under `gravity` (m/s², `support.rs`); the other steps run without
+/// ratio may be capped, as `supports` says (`support.rs`); the other steps run without
 /// the test.
 #[inline(always)]
 pub(crate) fn sides<'s, 'a, const N: usize, const CAPPED: bool>(
@@ -415,7 +415,7 @@ pub(crate) fn sides<'s, 'a, const N: usize, const CAPPED: bool>(
     bodies: &'s Pool<Body<'a>, N>,
     solver_bodies: &'s [SolverBody],
     solver_index: &[u32; N],
-    gravity: Vec3,
+    supports: &Supports<'_>,
 ) -> Option<Sides<'s, 'a>> {
     if c.sensor || c.len == 0 {
         return None;
@@ -450,8 +450,9 @@ pub(crate) fn sides<'s, 'a, const N: usize, const CAPPED: bool>(
     // heavy contact.
     if CAPPED {
         if let (Some(a), Some(b)) = (sa, sb) {
-            if a.support == support::HELD {
-                cap_support_mass(&mut side, support::held_side(a, b, c.normal, gravity));
+            if supports.held(ia) {
+                let held = support::held_side(a, b, c.normal, supports.gravity);
+                cap_support_mass(&mut side, held);
             }
         }
     }
@@ -489,13 +490,13 @@ pub(crate) fn prepare<const N: usize>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
-    capped_gravity: Option<Vec3>,
+    supports: Option<&Supports<'_>>,
     cfg: &WorldConfig,
     k: &mut ContactConstraint,
 ) -> bool {
-    let side = match capped_gravity {
-        Some(g) => sides::<N, true>(c, bodies, solver_bodies, solver_index, g),
-        None => sides::<N, false>(c, bodies, solver_bodies, solver_index, Vec3::ZERO),
+    let side = match supports {
+        Some(s) => sides::<N, true>(c, bodies, solver_bodies, solver_index, s),
+        None => sides::<N, false>(c, bodies, solver_bodies, solver_index, &Supports::NONE),
     };
     let Some(side) = side else {
         return false;

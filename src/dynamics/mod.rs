@@ -15,6 +15,7 @@ pub(crate) mod sleep;
 pub mod snapshot;
 pub(crate) mod solver;
 pub(crate) mod support;
+pub(crate) mod union_find;
 pub(crate) mod wide;
 
 pub use pool::BodyHandle;

@@ -7,12 +7,13 @@
 //!    `sleep_time`; any faster and the timer restarts at 0.
 //! 2. **Islands.** Union-find over the slots: every touching, non-sensor contact between
 //!    two dynamic bodies joins their sets (static and kinematic bodies do not join
-//!    islands, or the whole world would be one). Roots are the smaller slot of a union
-//!    (deterministic); `find` halves paths. Then every slot points straight at its root.
+//!    islands, or the whole world would be one), in `union_find.rs`: roots are the
+//!    smaller slot of a union (deterministic). Then every slot points straight at its
+//!    root.
 //! 3. **Keep awake.** An island is kept awake by any member that is awake and not yet
 //!    sleepy (`sleep_time < cfg.sleep_time`), and by any touching, non-sensor contact with
 //!    a moving kinematic body (a moving platform keeps what it carries awake). The mark is
-//!    bit 31 of the root's entry, so the scratch stays `N` words.
+//!    bit 31 of the root's entry (`union_find.rs`), so the scratch stays `N` words.
 //! 4. **Decide.** Members of a kept island are all awake (sleepers woken with a fresh
 //!    timer: this is how a hit on a sleeping stack wakes the stack). Members of any other
 //!    island, where every awake member has been slow long enough, fall asleep with their
@@ -24,15 +25,9 @@ use super::body::{Body, BodyKind};
 use super::contact::Contact;
 use super::pool::Pool;
 use super::solver::is_moving_kinematic;
+use super::union_find;
 use crate::config::WorldConfig;
 use crate::math::Vec3;
-
-/// Bit of a root's entry in the scratch that marks its island as kept awake.
-const KEEP_AWAKE: u32 = 1 << 31;
-
-/// The slot bits of a scratch entry. Slots are below `2³¹` (a pool that large would not
-/// fit in memory).
-const SLOT: u32 = !KEEP_AWAKE;
 
 /// Update sleep timers and island sleep state; returns the number of awake dynamic bodies.
 pub(crate) fn update_sleep<const N: usize>(
@@ -52,7 +47,7 @@ pub(crate) fn update_sleep<const N: usize>(
         if !b.is_dynamic() {
             continue;
         }
-        if is_marked(parent, root_of(parent, i)) {
+        if union_find::marked(parent, i as u32) {
             if !b.awake {
                 b.awake = true;
                 b.sleep_time = 0.0;
@@ -112,73 +107,20 @@ fn links<const N: usize>(c: &Contact, bodies: &Pool<Body<'_>, N>) -> bool {
     }
 }
 
-/// The root of `x`'s set, halving the path on the way (each visited entry skips to its
-/// grandparent). At most `N` hops: a path never revisits a slot.
-fn find<const N: usize>(parent: &mut [u32; N], x: u32) -> u32 {
-    let mut x = x;
-    for _ in 0..N {
-        let p = parent.get(x as usize).map_or(x, |e| e & SLOT);
-        if p == x {
-            return x;
-        }
-        let grand = parent.get(p as usize).map_or(p, |e| e & SLOT);
-        if let Some(e) = parent.get_mut(x as usize) {
-            *e = grand;
-        }
-        x = grand;
-    }
-    x
-}
-
 /// Step 2: the islands, each slot's entry pointing straight at its root afterwards.
 fn build_islands<const N: usize>(
     bodies: &Pool<Body<'_>, N>,
     contacts: &[Contact],
     parent: &mut [u32; N],
 ) {
-    let high = bodies.high();
-    for (i, e) in parent.iter_mut().enumerate().take(high) {
-        *e = i as u32;
-    }
+    let entries = parent.get_mut(..bodies.high()).unwrap_or_default();
+    union_find::reset(entries);
     for c in contacts {
-        if !links(c, bodies) {
-            continue;
-        }
-        let ra = find(parent, c.a);
-        let rb = find(parent, c.b);
-        // The larger root joins the smaller: the root of an island is its lowest slot.
-        let (keep, join) = if ra < rb { (ra, rb) } else { (rb, ra) };
-        if let Some(e) = parent.get_mut(join as usize) {
-            *e = keep;
+        if links(c, bodies) {
+            union_find::union(entries, c.a, c.b);
         }
     }
-    for i in 0..high {
-        let r = find(parent, i as u32);
-        if let Some(e) = parent.get_mut(i) {
-            *e = r;
-        }
-    }
-}
-
-/// The root of slot `i` once the islands are flat.
-#[inline]
-fn root_of<const N: usize>(parent: &[u32; N], i: usize) -> u32 {
-    parent.get(i).map_or(i as u32, |e| e & SLOT)
-}
-
-/// True when the island of root `r` is kept awake.
-#[inline]
-fn is_marked<const N: usize>(parent: &[u32; N], r: u32) -> bool {
-    parent.get(r as usize).is_some_and(|e| e & KEEP_AWAKE != 0)
-}
-
-/// Mark the island of slot `i` as kept awake.
-#[inline]
-fn mark<const N: usize>(parent: &mut [u32; N], i: usize) {
-    let r = root_of(parent, i);
-    if let Some(e) = parent.get_mut(r as usize) {
-        *e |= KEEP_AWAKE;
-    }
+    union_find::flatten(entries);
 }
 
 /// Step 3: mark islands with an awake, not yet sleepy member or a moving kinematic
@@ -191,7 +133,7 @@ fn mark_kept_islands<const N: usize>(
 ) {
     for (i, b) in bodies.iter() {
         if b.is_dynamic() && b.awake && b.sleep_time < cfg.sleep_time {
-            mark(parent, i);
+            union_find::mark(parent, i as u32);
         }
     }
     for c in contacts {
@@ -202,33 +144,10 @@ fn mark_kept_islands<const N: usize>(
             continue;
         };
         if is_moving_kinematic(a) && b.is_dynamic() {
-            mark(parent, c.b as usize);
+            union_find::mark(parent, c.b);
         }
         if is_moving_kinematic(b) && a.is_dynamic() {
-            mark(parent, c.a as usize);
+            union_find::mark(parent, c.a);
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn find_halves_paths_and_returns_the_root() {
-        // A chain 4 → 3 → 2 → 1 → 0.
-        let mut parent = [0u32, 0, 1, 2, 3];
-        assert_eq!(find(&mut parent, 4), 0);
-        // Halving: 4 now skips to 2, 2 to 0.
-        assert_eq!(parent, [0, 0, 0, 2, 2]);
-    }
-
-    #[test]
-    fn marks_live_on_roots_only() {
-        let mut parent = [0u32, 0, 0, 3];
-        mark(&mut parent, 2);
-        assert!(is_marked(&parent, root_of(&parent, 1)));
-        assert!(!is_marked(&parent, root_of(&parent, 3)));
-        assert_eq!(root_of(&parent, 0), 0);
     }
 }

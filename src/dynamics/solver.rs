@@ -84,10 +84,6 @@ pub(crate) struct SolverBody {
     pub slot: u32,
     /// Bit `c` set: a contact of colour `c` moves this body (`wide.rs`).
     pub colours: u32,
-    /// [`support::HELD`] when the body's island touches a body that does not move, in a
-    /// step with a heavy contact; else [`support::FREE`] (`support.rs`). A union-find
-    /// entry while the islands are built.
-    pub support: u32,
 }
 
 impl SolverBody {
@@ -106,7 +102,6 @@ impl SolverBody {
         projected: 0.0,
         slot: NONE,
         colours: 0,
-        support: support::FREE,
     };
 }
 
@@ -120,6 +115,12 @@ pub(crate) struct Solver<const N: usize, const C: usize> {
     pub index: [u32; N],
     /// The constraints, coloured and packed four to a group.
     pub store: WideStore<C>,
+    /// Whether this step has a heavy contact (`support.rs`): then `marks` holds which
+    /// islands the ground holds up.
+    pub heavy: bool,
+    /// Support marks by solver body: union-find entries (`support.rs`), valid in a step
+    /// with `heavy` only.
+    pub marks: [u32; N],
 }
 
 impl<const N: usize, const C: usize> Solver<N, C> {
@@ -129,6 +130,8 @@ impl<const N: usize, const C: usize> Solver<N, C> {
             bodies: HVec::new(),
             index: [NONE; N],
             store: WideStore::new(),
+            heavy: false,
+            marks: [0; N],
         }
     }
 
@@ -256,8 +259,10 @@ fn plan<const N: usize, const C: usize>(
     // Unique second components: an unstable sort is deterministic.
     crate::sort::sort_pairs(scratch);
     // Which islands the ground holds up, where a body may rest on one far lighter.
+    solver.heavy = heavy;
     if heavy {
-        support::mark_supported(&mut solver.bodies, &solver.index, contacts, scratch);
+        let (marks, sb, si) = (&mut solver.marks, &solver.bodies, &solver.index);
+        support::mark_supported(marks, sb, si, contacts, scratch);
     }
     // Colour in rank (visit) order.
     let mut count = [0u32; wide::COLORS + 1];
@@ -297,16 +302,23 @@ fn plan<const N: usize, const C: usize>(
     let mut overflow_from = None;
     let softness = contact_solver::Softness::for_contacts(cfg);
     let (sb, si) = (&solver.bodies, &solver.index);
+    let supports = support::Supports {
+        marks: &solver.marks,
+        gravity: cfg.gravity,
+    };
     let mut prepare = |g: usize, batch: &[u32; 4]| {
         let Some(mut group) = store.group(g) else {
             return;
         };
         let group = &mut group;
         // Capped contacts only in a step with a heavy contact (`support.rs`).
+        let soft = &softness;
         if heavy {
-            wide::prepare_group::<N, true>(group, batch, contacts, bodies, sb, si, &softness, cfg);
+            let sup = &supports;
+            wide::prepare_group::<N, true>(group, batch, contacts, bodies, sb, si, soft, sup, cfg);
         } else {
-            wide::prepare_group::<N, false>(group, batch, contacts, bodies, sb, si, &softness, cfg);
+            let sup = &support::Supports::NONE;
+            wide::prepare_group::<N, false>(group, batch, contacts, bodies, sb, si, soft, sup, cfg);
         }
     };
     for &(colour, ci) in scratch.iter() {
@@ -772,15 +784,20 @@ mod tests {
             w.step();
             (w, column, flying)
         };
-        let support = |w: &World<'static, 64, 512, 64>, h: crate::BodyHandle| {
-            w.solver.body_of_slot(h.index).map(|s| s.support).unwrap()
+        let held = |w: &World<'static, 64, 512, 64>, h: crate::BodyHandle| {
+            let supports = support::Supports {
+                marks: &w.solver.marks,
+                gravity: w.config.gravity,
+            };
+            supports.held(w.solver.index[h.index as usize])
         };
         let (world, column, flying) = build(1.0e6);
         let (mut w, _, _) = planned(&world);
+        assert!(w.solver.heavy);
         for (i, h) in column.iter().enumerate() {
-            assert_eq!(support(&w, *h), support::HELD, "box {i}");
+            assert!(held(&w, *h), "box {i}");
         }
-        assert_eq!(support(&w, flying), support::FREE);
+        assert!(!held(&w, flying));
         // The heavy box's contact: capped (the lane's inverse mass of the support is
         // 20 times the heavy box's, not the support's own 1000 times).
         let (top, heavy) = (column[3].index, column[4].index);
@@ -811,12 +828,10 @@ mod tests {
             }
         }
         assert_eq!(seen, 1);
-        // Equal densities: no marks at all.
-        let (world, column, _) = build(1000.0);
+        // Equal densities: no heavy contact, so no marks are read.
+        let (world, _, _) = build(1000.0);
         let (w, _, _) = planned(&world);
-        for h in column {
-            assert_eq!(support(&w, h), support::FREE);
-        }
+        assert!(!w.solver.heavy);
     }
 
     /// Run `f` on a thread with a 64 MiB stack: worlds, their clones and the stores are
@@ -856,10 +871,12 @@ mod tests {
                         }
                         let c = &w.contacts[ci as usize];
                         let (sb, si) = (&w.solver.bodies, &w.solver.index);
-                        // Gravity for capped contacts wherever some island is held
-                        // up (the same lanes as in the step with a heavy contact).
-                        let held = sb.iter().any(|b| b.support == support::HELD);
-                        let under = held.then_some(cfg.gravity);
+                        // The support marks in a step with a heavy contact.
+                        let supports = support::Supports {
+                            marks: &w.solver.marks,
+                            gravity: cfg.gravity,
+                        };
+                        let under = w.solver.heavy.then_some(&supports);
                         assert!(contact_solver::prepare(
                             c, ci, &w.bodies, sb, si, &softness, under, &cfg, &mut k
                         ));

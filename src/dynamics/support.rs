@@ -36,15 +36,16 @@
 //!
 //! Support is only worked out in a step where some contact joins two moving bodies of
 //! mass ratio [`HEAVY_RATIO`] or more (the solver notices while it lists the contacts):
-//! union-find over the contacts between moving bodies, as the sleep stage builds its
-//! islands, then a mark on every island that touches a body that does not move. In any
-//! other step every body is [`FREE`] and no contact is capped.
+//! union-find over the contacts between moving bodies (`union_find.rs`, as the sleep
+//! stage builds its islands), with a mark on every island that touches a body that does
+//! not move. In any other step the marks are not read and no contact is capped.
 //!
 //! The same inverse masses serve every pass over the contact this step: warm start, soft
 //! and relax iterations, the restitution pass and projection.
 
 use super::contact::Contact;
 use super::solver::{SolverBody, NONE};
+use super::union_find;
 use crate::math::Vec3;
 
 /// The largest mass ratio a contact under a heavy body sees (module docs), and the ratio
@@ -54,18 +55,6 @@ use crate::math::Vec3;
 /// the column, `tests/stability.rs`). Kept that high so that ordinary piles of bodies of
 /// mixed sizes stay uncapped nearly everywhere.
 pub(crate) const HEAVY_RATIO: f32 = 20.0;
-
-/// A solver body whose island does not touch a body that does not move (and every
-/// body in a step without a heavy contact).
-pub(crate) const FREE: u32 = u32::MAX;
-
-/// A solver body whose island touches a body that does not move: it can hold a heavier
-/// one up.
-pub(crate) const HELD: u32 = u32::MAX - 1;
-
-/// Bit of a root's entry, while the islands are built, that marks an island touching a
-/// body that does not move. Solver indices are far below it.
-const TOUCHES_GROUND: u32 = 1 << 31;
 
 /// `cos² 60°`: a capped contact's normal is within 60° of up.
 const UPRIGHT_COS2: f32 = 0.25;
@@ -109,22 +98,20 @@ pub(crate) fn masses_differ(lightest: f32, heaviest: f32) -> bool {
     lightest >= HEAVY_RATIO * heaviest
 }
 
-/// Mark every moving solver body [`HELD`] or [`FREE`] (module docs) from the contacts
-/// `listed` (`(_, contact index)` entries of the contacts that push); `index` maps pool
-/// slots to solver bodies. Each body's `support` field is its union-find entry while
-/// the islands are built: the parent's index, always smaller than the body's own (the
-/// root of a union is the smaller index, and path halving only moves a body to a
-/// smaller ancestor), so one pass in index order finds every root already resolved.
-/// Integer work in the listed order: the same marks on every target.
+/// Build the support marks of the solver `bodies` in `marks` (one entry each, module
+/// docs) from the contacts `listed` (`(_, contact index)` entries of the contacts that
+/// push); `index` maps pool slots to solver bodies. Afterwards [`Supports::held`] tells a
+/// body whose island touches a body that does not move. Integer work in the listed
+/// order: the same marks on every target.
 pub(crate) fn mark_supported(
-    bodies: &mut [SolverBody],
+    marks: &mut [u32],
+    bodies: &[SolverBody],
     index: &[u32],
     contacts: &[Contact],
     listed: &[(u32, u32)],
 ) {
-    for (i, b) in bodies.iter_mut().enumerate() {
-        b.support = i as u32;
-    }
+    let marks = marks.get_mut(..bodies.len()).unwrap_or_default();
+    union_find::reset(marks);
     let ends = |ci: u32| {
         contacts.get(ci as usize).map(|c| {
             let side = |slot: u32| index.get(slot as usize).copied().unwrap_or(NONE);
@@ -134,91 +121,46 @@ pub(crate) fn mark_supported(
     for &(_, ci) in listed {
         let Some((a, b)) = ends(ci) else { continue };
         match (moves(bodies, a), moves(bodies, b)) {
-            (true, true) => union(bodies, a, b),
-            (true, false) => mark_root(bodies, a),
-            (false, true) => mark_root(bodies, b),
+            (true, true) => union_find::union(marks, a, b),
+            (true, false) => union_find::mark(marks, a),
+            (false, true) => union_find::mark(marks, b),
             (false, false) => {}
         }
     }
-    for i in 0..bodies.len() {
-        let entry = entry(bodies, i as u32);
-        let parent = entry & !TOUCHES_GROUND;
-        let resolved = if parent == i as u32 {
-            if entry & TOUCHES_GROUND != 0 {
-                HELD
-            } else {
-                FREE
-            }
-        } else {
-            // The parent is smaller, so already resolved to HELD or FREE.
-            self::entry(bodies, parent)
-        };
-        if let Some(b) = bodies.get_mut(i) {
-            b.support = resolved;
-        }
+    union_find::flatten(marks);
+}
+
+/// What the capped prepare reads (module docs): the support marks [`mark_supported`]
+/// built this step, by solver body, and gravity (m/s²).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Supports<'m> {
+    /// Union-find entries by solver body, flattened.
+    pub marks: &'m [u32],
+    /// The world's gravity (m/s²): "up" is against it.
+    pub gravity: Vec3,
+}
+
+impl Supports<'_> {
+    /// No marks, no gravity: for the prepare of a step without a heavy contact.
+    pub(crate) const NONE: Supports<'static> = Supports {
+        marks: &[],
+        gravity: Vec3::ZERO,
+    };
+
+    /// Whether solver body `i`'s island touches a body that does not move.
+    #[inline]
+    pub(crate) fn held(&self, i: u32) -> bool {
+        union_find::marked(self.marks, i)
     }
-}
-
-/// Body `i`'s union-find entry (its parent, with [`TOUCHES_GROUND`] on a marked root).
-#[inline]
-fn entry(bodies: &[SolverBody], i: u32) -> u32 {
-    bodies.get(i as usize).map_or(i, |s| s.support)
-}
-
-/// Set body `i`'s entry.
-#[inline]
-fn set_entry(bodies: &mut [SolverBody], i: u32, e: u32) {
-    if let Some(s) = bodies.get_mut(i as usize) {
-        s.support = e;
-    }
-}
-
-/// The root of body `i`'s island, halving the path on the way (each visited body is
-/// moved to its grandparent, a smaller index).
-fn find(bodies: &mut [SolverBody], mut i: u32) -> u32 {
-    // Each step moves to a smaller index: at most `i` steps.
-    for _ in 0..=bodies.len() {
-        let parent = entry(bodies, i) & !TOUCHES_GROUND;
-        if parent == i {
-            return i;
-        }
-        let grand = entry(bodies, parent) & !TOUCHES_GROUND;
-        if grand != parent {
-            // `i` is not a root: its entry carries no mark.
-            set_entry(bodies, i, grand);
-        }
-        i = grand;
-    }
-    i
-}
-
-/// Join the islands of bodies `a` and `b`: the smaller root stays root and keeps the
-/// mark of either.
-fn union(bodies: &mut [SolverBody], a: u32, b: u32) {
-    let (ra, rb) = (find(bodies, a), find(bodies, b));
-    if ra == rb {
-        return;
-    }
-    let (root, child) = if ra < rb { (ra, rb) } else { (rb, ra) };
-    let mark = (entry(bodies, root) | entry(bodies, child)) & TOUCHES_GROUND;
-    set_entry(bodies, root, root | mark);
-    set_entry(bodies, child, root);
-}
-
-/// Mark the island of body `i` as touching a body that does not move.
-fn mark_root(bodies: &mut [SolverBody], i: u32) {
-    let r = find(bodies, i);
-    set_entry(bodies, r, r | TOUCHES_GROUND);
 }
 
 /// Which side of a contact with normal `n` (from A to B) between the moving solver
-/// bodies `a` and `b` holds the other up with the ratio capped (module docs), under
-/// `gravity` (m/s²).
-/// Out of line: the solver calls it only for contacts in an island marked [`HELD`].
+/// bodies `a` and `b`, in an island the ground holds up ([`Supports::held`]), holds the
+/// other up with the ratio capped (module docs), under `gravity` (m/s²).
+/// Out of line: the solver calls it only for contacts in a held island.
 #[inline(never)]
 pub(crate) fn held_side(a: &SolverBody, b: &SolverBody, n: Vec3, gravity: Vec3) -> Held {
-    // One island (they touch): both HELD or both FREE.
-    if a.support != HELD || a.inv_mass <= 0.0 || b.inv_mass <= 0.0 {
+    if a.inv_mass <= 0.0 || b.inv_mass <= 0.0 {
         return Held::Neither;
     }
     // n · up, with up = −g / |g|, compared against cos 60° without a square root.
@@ -241,10 +183,9 @@ pub(crate) fn held_side(a: &SolverBody, b: &SolverBody, n: Vec3, gravity: Vec3) 
 mod tests {
     use super::*;
 
-    fn body(inv_mass: f32, support: u32) -> SolverBody {
+    fn body(inv_mass: f32) -> SolverBody {
         SolverBody {
             inv_mass,
-            support,
             ..SolverBody::ZERO
         }
     }
@@ -252,7 +193,7 @@ mod tests {
     const G: Vec3 = Vec3::new(0.0, -9.81, 0.0);
 
     /// Union-find against a brute-force oracle: on random contact graphs (solver bodies
-    /// that move, kinematic ones, slots without a solver body), a body is HELD exactly
+    /// that move, kinematic ones, slots without a solver body), a body is held exactly
     /// when a breadth-first search over moving–moving contacts reaches a moving body that
     /// touches one that does not move.
     #[test]
@@ -273,7 +214,7 @@ mod tests {
                     count += 1;
                 }
             }
-            let bodies = &mut bodies[..count];
+            let bodies = &bodies[..count];
             let mut contacts = [Contact::default(); 64];
             let mut listed = [(0u32, 0u32); 64];
             let pairs = (rng.next_u64() % 64) as usize;
@@ -283,7 +224,12 @@ mod tests {
                 *l = (0, i as u32);
             }
             let listed = &listed[..pairs];
-            mark_supported(bodies, &index, &contacts, listed);
+            let mut marks = [0u32; 48];
+            mark_supported(&mut marks, bodies, &index, &contacts, listed);
+            let supports = Supports {
+                marks: &marks,
+                gravity: G,
+            };
             // The oracle.
             let moving = |i: u32| bodies.get(i as usize).is_some_and(|b| b.inv_mass > 0.0);
             let ends = |e: &(u32, u32)| {
@@ -311,8 +257,7 @@ mod tests {
             }
             for (i, b) in bodies.iter().enumerate() {
                 if b.inv_mass > 0.0 {
-                    let want = if held[i] { HELD } else { FREE };
-                    assert_eq!(b.support, want, "round {round}, body {i}");
+                    assert_eq!(supports.held(i as u32), held[i], "round {round}, body {i}");
                 }
             }
         }
@@ -320,8 +265,8 @@ mod tests {
 
     #[test]
     fn a_heavy_body_on_a_supported_light_one_is_held_with_the_ratio_capped() {
-        let light = body(1.0, HELD);
-        let heavy = body(0.01, HELD);
+        let light = body(1.0);
+        let heavy = body(0.01);
         // Light below (A), heavy above (B): the normal from A to B points up.
         assert_eq!(held_side(&light, &heavy, Vec3::Y, G), Held::SupportA);
         // The same contact written the other way round.
@@ -330,14 +275,11 @@ mod tests {
 
     #[test]
     fn the_cap_needs_the_ratio_support_slope_rest_and_gravity() {
-        let light = body(1.0, HELD);
-        let heavy = body(0.01, HELD);
+        let light = body(1.0);
+        let heavy = body(0.01);
         // Ratio just under HEAVY_RATIO: uncapped.
-        let not_heavy = body(1.0 / (HEAVY_RATIO * 0.99), HELD);
+        let not_heavy = body(1.0 / (HEAVY_RATIO * 0.99));
         assert_eq!(held_side(&light, &not_heavy, Vec3::Y, G), Held::Neither);
-        // Neither body held up by the ground: uncapped.
-        let (floating, falling) = (body(1.0, FREE), body(0.01, FREE));
-        assert_eq!(held_side(&floating, &falling, Vec3::Y, G), Held::Neither);
         // Light above heavy: uncapped.
         assert_eq!(held_side(&heavy, &light, Vec3::Y, G), Held::Neither);
         let at_61 = Vec3::new(libm::sinf(1.065), libm::cosf(1.065), 0.0);

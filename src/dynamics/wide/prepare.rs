@@ -16,6 +16,7 @@ use super::super::contact::Contact;
 use super::super::contact_solver::{clip_to_disc, sides, torque_free, Softness};
 use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
+use super::super::support::Supports;
 use super::*;
 use crate::config::WorldConfig;
 use crate::math::lanes::Pose4;
@@ -105,6 +106,7 @@ pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
+    supports: &Supports<'_>,
     cfg: &WorldConfig,
 ) {
     let mut x = Inputs::default();
@@ -113,7 +115,7 @@ pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
     let mut lane = |l: usize, ci: u32| {
         if let Some(c) = contacts.get(ci as usize) {
             let (b, sb, si) = (bodies, solver_bodies, solver_index);
-            gather_lane::<N, CAPPED>(group, &mut x, l, ci, c, b, sb, si, softness, cfg.gravity);
+            gather_lane::<N, CAPPED>(group, &mut x, l, ci, c, b, sb, si, softness, supports);
         }
     };
     lane(0, c0);
@@ -140,9 +142,9 @@ fn gather_lane<const N: usize, const CAPPED: bool>(
     solver_bodies: &[SolverBody],
     solver_index: &[u32; N],
     softness: &[Softness; 2],
-    gravity: Vec3,
+    supports: &Supports<'_>,
 ) {
-    let Some(side) = sides::<N, CAPPED>(c, bodies, solver_bodies, solver_index, gravity) else {
+    let Some(side) = sides::<N, CAPPED>(c, bodies, solver_bodies, solver_index, supports) else {
         return;
     };
     let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
