@@ -235,13 +235,7 @@ fn plan<const N: usize, const C: usize>(
         }
         let ia = solver.index.get(c.a as usize).copied().unwrap_or(NONE);
         let ib = solver.index.get(c.b as usize).copied().unwrap_or(NONE);
-        let moves = |i: u32| {
-            solver
-                .bodies
-                .get(i as usize)
-                .is_some_and(|s| s.inv_mass > 0.0)
-        };
-        if !moves(ia) && !moves(ib) {
+        if !moves(&solver.bodies, ia) && !moves(&solver.bodies, ib) {
             continue;
         }
         if masses_differ && !heavy {
@@ -601,6 +595,13 @@ pub(crate) fn clamp_length(v: Vec3, max: f32) -> Vec3 {
     } else {
         v
     }
+}
+
+/// Whether solver body `i` moves in the solve: it has an entry and a dynamic body's
+/// inverse mass (kinematic bodies have 0).
+#[inline]
+pub(crate) fn moves(bodies: &[SolverBody], i: u32) -> bool {
+    bodies.get(i as usize).is_some_and(|s| s.inv_mass > 0.0)
 }
 
 /// True for a body the solver moves: dynamic and awake.

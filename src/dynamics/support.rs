@@ -44,7 +44,7 @@
 //! and relax iterations, the restitution pass and projection.
 
 use super::contact::Contact;
-use super::solver::{SolverBody, NONE};
+use super::solver::{moves, SolverBody, NONE};
 use super::union_find;
 use crate::math::Vec3;
 
@@ -74,12 +74,6 @@ pub(crate) enum Held {
     SupportA,
     /// Body B is the lighter support below A.
     SupportB,
-}
-
-/// Whether the solver body `i` moves in the solve (a dynamic body with an entry).
-#[inline]
-fn moves(bodies: &[SolverBody], i: u32) -> bool {
-    bodies.get(i as usize).is_some_and(|s| s.inv_mass > 0.0)
 }
 
 /// Whether one of two moving bodies (inverse masses in 1/kg) weighs at least
