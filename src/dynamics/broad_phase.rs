@@ -19,11 +19,19 @@
 //! ([`AabbTree`], Box2D v3's `b2DynamicTree`: insertion by the surface-area heuristic,
 //! rotations), one leaf per body, tagged with the body's kind. When some body moved,
 //! its leaf is inserted (a body that appeared) or moved to its new enlarged box, and
-//! then each moved body asks the tree for the boxes that overlap its own: a dynamic body
-//! all of them, a static or kinematic one only the dynamic ones (the only kind it may
-//! pair with, [`may_pair`]). A pair of two moved bodies is taken from the lower slot's
-//! query only. The pairs that may collide and have no contact yet are the new pairs,
-//! sorted by `(a, b)`; when many bodies moved, "no contact yet" is looked up in a
+//! then the overlapping boxes are looked up in one of two ways, which find the same set:
+//!
+//! - **a few moved bodies** (fewer than one leaf in four): each asks the tree for the
+//!   boxes that overlap its own: a dynamic body all of them, a static or kinematic one
+//!   only the dynamic ones (the only kind it may pair with, [`may_pair`]). A pair of two
+//!   moved bodies is taken from the lower slot's query only;
+//! - **many**: one walk of the tree against itself ([`AabbTree::overlapping_pairs`])
+//!   lists every pair of overlapping leaves with a moved body and a dynamic one, crossing
+//!   the upper levels of the tree once instead of once per query (a walk whose stack
+//!   overflows gives way to the queries).
+//!
+//! The pairs that may collide and have no contact yet are the new pairs, sorted by
+//! `(a, b)`; when many bodies moved, "no contact yet" is looked up in a
 //! per-body index of the contacts ([`PairIndex`]) rather than by binary search. A step in
 //! which nothing moved out of its box does no tree work at all: a resting or sleeping
 //! world costs one box test per awake body.
@@ -97,6 +105,13 @@ fn partners(kind: BodyKind) -> u8 {
         BodyKind::Static | BodyKind::Kinematic => DYNAMIC,
     }
 }
+
+/// A search walks the tree against itself when at least one leaf in `WALK_MOVES` moved.
+const WALK_MOVES: usize = 4;
+
+/// Node pairs that may wait at once in the walk (a walk needs about three per level of
+/// the tree; one that needs more gives way to the queries).
+const WALK_STACK: usize = 256;
 
 /// The broad phase: a dynamic AABB tree over the bodies' enlarged boxes.
 #[derive(Clone, Debug)]
@@ -209,6 +224,17 @@ impl<const N: usize> BroadPhase<N> {
         pairs: &mut HVec<(u32, u32), P>,
         report: &mut StepReport,
     ) {
+        self.find_new_pairs_with::<P, WALK_STACK>(bodies, contacts, pairs, report);
+    }
+
+    /// [`BroadPhase::find_new_pairs`] with a walk stack of `S` node pairs.
+    fn find_new_pairs_with<const P: usize, const S: usize>(
+        &mut self,
+        bodies: &mut Pool<Body<'_>, N>,
+        contacts: &[Contact],
+        pairs: &mut HVec<(u32, u32), P>,
+        report: &mut StepReport,
+    ) {
         pairs.clear();
         if self.stale {
             self.rebuild(bodies);
@@ -229,40 +255,59 @@ impl<const N: usize> BroadPhase<N> {
         let index: PairIndex<'_, N> = PairIndex::new(contacts, build);
         let mut kept = SmallestPairs::new(pairs);
         let mut retry = [false; N];
-        for (i, body_i) in bodies.iter() {
-            if !body_i.moved {
-                continue;
+        // Offer the pair of the distinct slots `i` and `j` (boxes that overlap, one moved).
+        let offer = |kept: &mut SmallestPairs<'_, P>, retry: &mut [bool; N], i: u32, j: u32| {
+            let (Some(body_i), Some(body_j)) = (bodies.at(i as usize), bodies.at(j as usize))
+            else {
+                return;
+            };
+            if !body_i.fat.overlaps(&body_j.fat) || !may_pair(body_i, body_j) {
+                return;
             }
-            let slot_i = i as u32;
-            self.tree
-                .query(&body_i.fat, partners(body_i.kind), |slot_j| {
-                    let Some(body_j) = bodies.at(slot_j as usize) else {
-                        return;
-                    };
-                    // A pair of two moved bodies comes from the lower slot's query.
-                    if slot_j == slot_i || (body_j.moved && slot_j < slot_i) {
-                        return;
+            let pair = if i < j { (i, j) } else { (j, i) };
+            if index.contains(pair) {
+                return;
+            }
+            if let Some((a, b)) = kept.offer(pair) {
+                for s in [a, b] {
+                    if let Some(r) = retry.get_mut(s as usize) {
+                        *r = true;
                     }
-                    if !body_i.fat.overlaps(&body_j.fat) || !may_pair(body_i, body_j) {
-                        return;
-                    }
-                    let pair = if slot_i < slot_j {
-                        (slot_i, slot_j)
-                    } else {
-                        (slot_j, slot_i)
-                    };
-                    if index.contains(pair) {
-                        return;
-                    }
-                    if let Some((a, b)) = kept.offer(pair) {
-                        for s in [a, b] {
-                            if let Some(r) = retry.get_mut(s as usize) {
-                                *r = true;
-                            }
-                        }
-                    }
-                });
+                }
+            }
+        };
+        // Many moved bodies: the tree against itself in one walk (module docs).
+        let mut found = false;
+        if moved.saturating_mul(WALK_MOVES) >= self.tree.len() {
+            let is_moved = |slot: u32| bodies.at(slot as usize).is_some_and(|b| b.moved);
+            found = self.tree.overlapping_pairs::<S>(is_moved, DYNAMIC, |i, j| {
+                offer(&mut kept, &mut retry, i, j);
+            });
             self.count_work();
+            if !found {
+                // The walk's stack overflowed: start over, one query per moved body.
+                kept = SmallestPairs::new(kept.pairs);
+                kept.pairs.clear();
+                retry = [false; N];
+            }
+        }
+        if !found {
+            for (i, body_i) in bodies.iter() {
+                if !body_i.moved {
+                    continue;
+                }
+                let slot_i = i as u32;
+                self.tree
+                    .query(&body_i.fat, partners(body_i.kind), |slot_j| {
+                        // A pair of two moved bodies comes from the lower slot's query.
+                        let moved_j = bodies.at(slot_j as usize).is_some_and(|b| b.moved);
+                        if slot_j == slot_i || (moved_j && slot_j < slot_i) {
+                            return;
+                        }
+                        offer(&mut kept, &mut retry, slot_i, slot_j);
+                    });
+                self.count_work();
+            }
         }
         let dropped = kept.dropped;
         // Keys are unique (each unordered pair is offered once), so an unstable sort is
@@ -579,23 +624,31 @@ mod tests {
     /// taken over without a removal must still work), random `moved` flags (a moved body
     /// gets a new box, the others keep theirs, as in the step) and existing contacts.
     /// With a small buffer, the smallest keys are kept and the bodies of the others stay
-    /// flagged. The tree stays valid and holds every body's box.
+    /// flagged. The tree stays valid and holds every body's box. Rounds with many moved
+    /// bodies take the walk, the others the queries (both checked to run), and a walk
+    /// whose stack overflows gives the queries' answer.
     #[test]
     fn search_matches_brute_force_over_steps() {
         const N: usize = 48;
         let mut rng = SplitMix64::new(7);
+        // Rounds searched by queries, by the walk.
+        let mut paths = [0; 2];
         let mut pool: Pool<Body<'static>, N> = Pool::new();
         let mut bp: BroadPhase<N> = BroadPhase::new();
         for round in 0..12 {
+            // Every other round a few bodies move and none come or go (one query each),
+            // else many (the walk).
+            let few = round % 2 == 1;
             let handles: std::vec::Vec<_> = (0..N).filter_map(|i| pool.handle_at(i)).collect();
-            for h in handles.iter().step_by(5) {
+            for h in handles.iter().step_by(5).filter(|_| !few) {
                 pool.remove(*h);
                 if round % 3 != 1 {
                     bp.remove_body(h.index);
                 }
             }
+            let share = if few { 6 } else { 2 };
             for (_, b) in pool.iter_mut() {
-                b.moved = rng.next_u64().is_multiple_of(2);
+                b.moved = rng.next_u64().is_multiple_of(share);
                 if b.moved {
                     let shift = Vec3::new(rng.range(-0.3, 0.3), 0.0, 0.0);
                     b.place(crate::math::Iso::new(
@@ -612,24 +665,39 @@ mod tests {
             let contacts = random_contacts(&pool, &mut rng);
             let expected = brute_force(&pool, &contacts);
             assert!(
-                expected.len() > 8,
+                expected.len() > 4,
                 "round {round}: scene too sparse to test"
             );
+            let moved = pool.iter().filter(|(_, b)| b.moved).count();
+            paths[usize::from(moved * WALK_MOVES >= pool.len())] += 1;
 
-            // A small buffer: the 8 smallest keys.
+            // A small buffer: the 4 smallest keys.
             let (mut small_pool, mut small_bp) = (pool.clone(), bp.clone());
-            let mut pairs: HVec<(u32, u32), 8> = HVec::new();
+            let mut pairs: HVec<(u32, u32), 4> = HVec::new();
             let mut report = StepReport::default();
             small_bp.find_new_pairs(&mut small_pool, &contacts, &mut pairs, &mut report);
-            assert_eq!(pairs.as_slice(), &expected[..8], "round {round}");
-            assert_eq!(report.dropped_pairs as usize, expected.len() - 8);
+            assert_eq!(pairs.as_slice(), &expected[..4], "round {round}");
+            assert_eq!(report.dropped_pairs as usize, expected.len() - 4);
             let mut retry = [false; N];
-            for &(a, b) in &expected[8..] {
+            for &(a, b) in &expected[4..] {
                 retry[a as usize] = true;
                 retry[b as usize] = true;
             }
             let retry: std::vec::Vec<bool> = pool.iter().map(|(i, _)| retry[i]).collect();
             assert_eq!(moved_flags(&small_pool), retry, "round {round}");
+
+            // A walk stack of 2 overflows at once: the queries take over, same answer.
+            let (mut tiny_pool, mut tiny_bp) = (pool.clone(), bp.clone());
+            let mut pairs: HVec<(u32, u32), 2048> = HVec::new();
+            let mut report = StepReport::default();
+            tiny_bp.find_new_pairs_with::<2048, 2>(
+                &mut tiny_pool,
+                &contacts,
+                &mut pairs,
+                &mut report,
+            );
+            assert_eq!(pairs.as_slice(), expected.as_slice(), "round {round}");
+            assert!(tiny_pool.iter().all(|(_, b)| !b.moved), "flags cleared");
 
             let mut pairs: HVec<(u32, u32), 2048> = HVec::new();
             let mut report = StepReport::default();
@@ -642,6 +710,10 @@ mod tests {
                 assert_eq!(bp.tree.aabb(bp.proxies[i]), Some(b.fat), "round {round}");
             }
         }
+        assert!(
+            paths[0] > 2 && paths[1] > 2,
+            "rounds by queries, by walk: {paths:?}"
+        );
     }
 
     /// A broad phase whose tree grew through a long history (bodies inserted in reverse
