@@ -268,11 +268,19 @@ struct Outcome {
     awake_reported: u32,
     /// rapier: bodies disabled because their state went non-finite, over the run.
     quarantined: usize,
+    /// Contact points handed to the solver, summed over the steps (carom: the step
+    /// report's points; rapier: its manifolds' solver contacts), counted outside the
+    /// timed calls.
+    points: u64,
 }
 
 impl Outcome {
     fn ms_per_step(&self) -> f64 {
         self.stepping.as_secs_f64() * 1e3 / f64::from(self.steps.max(1))
+    }
+
+    fn points_per_step(&self) -> f64 {
+        self.points as f64 / f64::from(self.steps.max(1))
     }
 
     fn invalid(&self) -> bool {
@@ -320,14 +328,16 @@ fn compare_scene(scene: Scene, hulls: &[ConvexHull], args: &Args) -> Result<Scen
             (c, r)
         };
         eprintln!(
-            "{:<13} rep {}/{} ({} first): carom {:9.3} ms/step (peak {} contacts), rapier {:9.3} ms/step",
+            "{:<13} rep {}/{} ({} first): carom {:9.3} ms/step (peak {} contacts, {:.0} points/step), rapier {:9.3} ms/step ({:.0} points/step)",
             scene.name(),
             rep + 1,
             args.reps,
             if carom_first { "carom" } else { "rapier" },
             c.ms_per_step(),
             c.peak_contacts,
-            r.ms_per_step()
+            c.points_per_step(),
+            r.ms_per_step(),
+            r.points_per_step()
         );
         check_validity(scene, &c, &r, &mut row.warnings);
         row.carom_ms.push(c.ms_per_step());
@@ -476,6 +486,7 @@ fn carom_run<'a, const B: usize, const C: usize, const E: usize>(
         o.dropped_events += u64::from(report.dropped_events);
         o.peak_contacts = o.peak_contacts.max(report.contacts);
         o.awake_reported = report.awake_bodies;
+        o.points += u64::from(report.points);
     }
     o.watched_end = v3(w.body(watch)?.position());
     let handles: Vec<_> = w.handles().collect();
@@ -595,6 +606,12 @@ fn rapier_scene(
         w.step();
         o.stepping += t0.elapsed();
         o.quarantined += w.quarantine().bodies().len();
+        o.points += w
+            .narrow_phase
+            .contact_pairs()
+            .flat_map(|p| p.manifolds().iter())
+            .map(|m| m.data.solver_contacts.len() as u64)
+            .sum::<u64>();
     }
     o.watched_end = w.bodies[watch].translation().to_array();
     for (_, b) in w.bodies.iter() {
