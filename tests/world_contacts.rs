@@ -349,28 +349,28 @@ fn one_hit_then_one_begin(
 /// Two balls, one fixed, the other closing at 3 m/s (5 cm per step, no gravity): a sphere
 /// pair is measured afresh every step with the step's margin and no reuse slack
 /// (`reuse_slack` is 0 for it), so its point appears at the first step that starts
-/// within the speculative margin plus what the pair closes in a step (2 + 5 cm) and not
-/// one step earlier at 7.3 cm, which one slop of slack would reach. One hit then, at
+/// within the speculative margin plus what the pair closes in a step (1 + 5 cm) and not
+/// one step earlier at 6.3 cm, which one slop of slack would reach. One hit then, at
 /// the full closing speed, then one begin.
 #[test]
 fn a_sphere_pair_appears_within_the_step_margin_and_reports_one_hit() {
     let mut world: World<4, 8> = World::with_config(zero_gravity()).unwrap();
     let fixed = world.add(BodyDesc::fixed(sphere(0.5))).unwrap();
-    // Gaps at the start of each step: 0.223, 0.173, 0.123, 0.073, 0.023.
-    let ball = add_falling_ball(&mut world, 1.223);
+    // Gaps at the start of each step: 0.213, 0.163, 0.113, 0.063, 0.013.
+    let ball = add_falling_ball(&mut world, 1.213);
     let cfg = *world.config();
     let margin = cfg.speculative_margin + 3.0 * cfg.dt;
     assert_eq!(reuse_slack(&sphere(0.5), &sphere(0.5)), 0.0);
     // The step a margin with one slop of slack would find it, and the one this finds it.
-    let with_slack = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin + REUSE_SLACK);
-    let first = (0..5).find(|k| 0.223 - 0.05 * *k as f32 <= margin);
+    let with_slack = (0..5).find(|k| 0.213 - 0.05 * *k as f32 <= margin + REUSE_SLACK);
+    let first = (0..5).find(|k| 0.213 - 0.05 * *k as f32 <= margin);
     assert_eq!((with_slack, first), (Some(3), Some(4)));
     let (hit_step, begin_step) = one_hit_then_one_begin(&mut world, (fixed, ball), |w, k| {
         if k == 3 {
             assert_eq!(w.contact_count(), 0, "no point yet");
         }
     });
-    assert_eq!(hit_step, first, "the fifth step starts 2.3 cm apart");
+    assert_eq!(hit_step, first, "the fifth step starts 1.3 cm apart");
     assert!(begin_step.is_some_and(|b| b > 4), "begin at {begin_step:?}");
     // It came to rest against the fixed ball, touching within the slop.
     let y = world.body(ball).unwrap().position().y;
@@ -379,8 +379,8 @@ fn a_sphere_pair_appears_within_the_step_margin_and_reports_one_hit() {
 
 /// A ball at 3 m/s (5 cm per step, no gravity) whose contact first appears as a
 /// speculative one: the narrow phase keeps points within the speculative margin plus
-/// what the pair closes in a step plus the reuse slack (2 + 5 + 0.5 cm), so the manifold
-/// appears at the step that starts 6.5 cm above the ground. The hit is reported then,
+/// what the pair closes in a step plus the reuse slack (1 + 5 + 0.5 cm), so the manifold
+/// appears at the step that starts 6 cm above the ground. The hit is reported then,
 /// at the full 3 m/s, because the solver stops the ball before it touches. One hit, then
 /// one begin when it touches, nothing more while it rests.
 #[test]
@@ -392,16 +392,16 @@ fn hit_is_reported_when_a_speculative_contact_appears() {
                 .position(Vec3::new(0.0, -0.5, 0.0)),
         )
         .unwrap();
-    // Gaps at the start of each step: 0.215, 0.165, 0.115, 0.065, 0.015 (speculative).
-    let ball = add_falling_ball(&mut world, 0.715);
+    // Gaps at the start of each step: 0.21, 0.16, 0.11, 0.06, 0.01 (speculative).
+    let ball = add_falling_ball(&mut world, 0.71);
     let (hit_step, begin_step) = one_hit_then_one_begin(&mut world, (ground, ball), |_, _| {});
     let cfg = *world.config();
     let reach = cfg.speculative_margin + 3.0 * cfg.dt + REUSE_SLACK;
-    let first = (0..5).find(|k| 0.215 - 0.05 * *k as f32 <= reach);
+    let first = (0..5).find(|k| 0.21 - 0.05 * *k as f32 <= reach);
     assert_eq!(first, Some(3));
     assert_eq!(
         hit_step, first,
-        "the fourth step starts 6.5 cm above the ground"
+        "the fourth step starts 6 cm above the ground"
     );
     assert!(begin_step.is_some_and(|b| b > 3), "begin at {begin_step:?}");
 }

@@ -33,7 +33,7 @@
 //!
 //! - The tolerance of the sweep is `slop` ([`MIN_TOLERANCE`] at least): the body stops
 //!   with a gap of `slop/2` to `slop`, so projection has nothing to push and the gap is
-//!   well inside the speculative margin (`4 · slop` by default) that the next narrow phase
+//!   inside the speculative margin (`2 · slop` by default) that the next narrow phase
 //!   keeps contacts within.
 //! - A pair already within the tolerance (or overlapping) at the start of the step is
 //!   left to the discrete contact, which already exists for it: stopping there would pin
