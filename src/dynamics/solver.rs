@@ -272,7 +272,7 @@ fn plan<const N: usize, const C: usize>(
             *n += 1;
         }
     }
-    place_in_colour_order(scratch, &count);
+    place_in_colour_order(scratch, &count, |ci| point_class(contacts, ci));
     // Groups: a new one every four lanes and at every change of colour.
     let mut groups = 0usize;
     let mut last: Option<(u32, usize)> = None;
@@ -342,19 +342,38 @@ fn plan<const N: usize, const C: usize>(
     };
 }
 
+/// Classes of contacts by point count (1, 2, 3, 4 points), the order of a colour's
+/// contacts (see [`place_in_colour_order`]).
+const POINT_CLASSES: usize = 4;
+
+/// The point class of contact `ci` ([`POINT_CLASSES`]): its point count less one.
+#[inline]
+fn point_class(contacts: &[Contact], ci: u32) -> usize {
+    contacts
+        .get(ci as usize)
+        .map_or(0, |c| usize::from(c.len.clamp(1, 4)) - 1)
+}
+
 /// Reorder `scratch` (entries `(colour, contact)` in visit order, `count[c]` of colour
-/// `c`) into solve order: colours ascending, visit order within a colour, and each
-/// colour's last partial group of fewer than four moved to the overflow colour (solved
-/// in runs of lanes without a shared body, packed four to a group: the store then needs
-/// at most one group beyond the contacts themselves). On return each entry's first
-/// component is its final colour.
+/// `c`) into solve order: colours ascending; within a colour, by point class (`class`
+/// of the contact index, below [`POINT_CLASSES`]), then visit order; each colour's last
+/// partial group of fewer than four (its last entries in visit order) moved to the
+/// overflow colour (solved in runs of lanes without a shared body, packed four to a
+/// group, in visit order: the store then needs at most one group beyond the contacts
+/// themselves). On return each entry's first component is its final colour.
 ///
-/// The order is that of a stable sort by final colour, built without sorting: every
-/// entry's destination is its colour's offset plus its place among the colour's
+/// The contacts of one colour share no moving body, so the order among them changes no
+/// velocity, no position and no bit; ordering them by point count packs groups whose
+/// contacts have the same number of points, which run the kernel of that many point
+/// rows instead of the largest count among four mixed contacts (`wide.rs`).
+///
+/// The order is that of a stable sort by (final colour, class), built without sorting:
+/// every entry's destination is its slot's offset plus its place among the slot's
 /// entries, and a cycle walk moves each entry there once (O(n) swaps).
 fn place_in_colour_order<const C: usize>(
     scratch: &mut HVec<(u32, u32), C>,
     count: &[u32; wide::COLORS + 1],
+    class: impl Fn(u32) -> usize,
 ) {
     let overflow = wide::OVERFLOW as usize;
     // Entries that stay in their colour: whole groups of four.
@@ -362,27 +381,42 @@ fn place_in_colour_order<const C: usize>(
     for (k, n) in keep.iter_mut().zip(count.iter()).take(overflow) {
         *k = *n / 4 * 4;
     }
-    let mut offset = [0u32; wide::COLORS + 1];
-    let mut at = 0u32;
-    for (o, k) in offset.iter_mut().zip(keep.iter()).take(overflow) {
-        *o = at;
-        at += *k;
-    }
-    if let Some(o) = offset.get_mut(overflow) {
-        *o = at;
-    }
-    // Destinations, packed with the final colour: `colour << 24 | destination`.
-    let mut seen = [0u32; wide::COLORS + 1];
-    for entry in scratch.iter_mut() {
+    // Slot of an entry: `colour · POINT_CLASSES + class` for one that stays, the last
+    // slot for the overflow colour. First pass: how many entries each slot gets.
+    const SLOTS: usize = wide::COLORS * POINT_CLASSES + 1;
+    let slot_of = |seen: &mut [u32; wide::COLORS + 1], entry: &(u32, u32)| {
         let c = (entry.0 as usize).min(overflow);
         let place = seen.get(c).copied().unwrap_or(0);
         if let Some(s) = seen.get_mut(c) {
             *s += 1;
         }
         let stays = c != overflow && place < keep.get(c).copied().unwrap_or(0);
-        let colour = if stays { c } else { overflow };
-        let dest = offset.get(colour).copied().unwrap_or(0);
-        if let Some(o) = offset.get_mut(colour) {
+        if stays {
+            (c, c * POINT_CLASSES + class(entry.1).min(POINT_CLASSES - 1))
+        } else {
+            (overflow, SLOTS - 1)
+        }
+    };
+    let mut in_slot = [0u32; SLOTS];
+    let mut seen = [0u32; wide::COLORS + 1];
+    for entry in scratch.iter() {
+        let (_, slot) = slot_of(&mut seen, entry);
+        if let Some(n) = in_slot.get_mut(slot) {
+            *n += 1;
+        }
+    }
+    let mut offset = [0u32; SLOTS];
+    let mut at = 0u32;
+    for (o, n) in offset.iter_mut().zip(in_slot.iter()) {
+        *o = at;
+        at += *n;
+    }
+    // Destinations, packed with the final colour: `colour << 24 | destination`.
+    let mut seen = [0u32; wide::COLORS + 1];
+    for entry in scratch.iter_mut() {
+        let (colour, slot) = slot_of(&mut seen, entry);
+        let dest = offset.get(slot).copied().unwrap_or(0);
+        if let Some(o) = offset.get_mut(slot) {
             *o += 1;
         }
         entry.0 = ((colour as u32) << 24) | (dest & 0x00ff_ffff);
@@ -1038,8 +1072,8 @@ mod tests {
     }
 
     /// The counting placement gives the order of the sort it replaces: by final colour
-    /// (each colour's last partial group moved to the overflow colour), then by visit
-    /// order.
+    /// (each colour's last partial group moved to the overflow colour), then by point
+    /// class within a colour that stays, then by visit order.
     #[test]
     fn colour_placement_matches_a_stable_sort() {
         let mut rng = SplitMix64::new(3);
@@ -1062,8 +1096,13 @@ mod tests {
                     e.0 = wide::OVERFLOW;
                 }
             }
-            want.sort_by_key(|e| e.0);
-            place_in_colour_order(&mut scratch, &count);
+            // Within a colour that stays, by class (here the contact index mod 4).
+            let class = |ci: u32| (ci % 4) as usize;
+            want.sort_by_key(|e| {
+                let kept = e.0 != wide::OVERFLOW;
+                (e.0, if kept { class(e.1) } else { 0 })
+            });
+            place_in_colour_order(&mut scratch, &count, class);
             assert_eq!(scratch.as_slice(), want.as_slice(), "n {n}");
         }
     }
