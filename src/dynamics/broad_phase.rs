@@ -7,8 +7,11 @@
 //! the gravity and force of this step), grown by the speculative margin, so two shapes
 //! closer than the margin always have overlapping boxes. That box is compared with the
 //! body's *enlarged box* `Body::fat`: while it fits, nothing changes; when it leaves,
-//! the enlarged box becomes the movement box grown by `aabb_margin` and the body is
-//! flagged `moved`. Static bodies have their exact box, set when they are added or
+//! the enlarged box becomes the movement box stretched two more steps' motion ahead
+//! (at most the body's bounding radius: [`look_ahead`]) and grown by `aabb_margin`, and
+//! the body is flagged `moved`. A body in steady motion (a falling pile) so leaves its
+//! box every few steps instead of every step (`spheres`' first 100 steps: 11 % fewer
+//! instructions). Static bodies have their exact box, set when they are added or
 //! teleported; sleeping bodies keep theirs.
 //!
 //! # New pairs (stage 3)
@@ -77,7 +80,7 @@ use super::pool::Pool;
 use super::solver::clamp_length;
 use crate::collide::{movement_bounds, Motion};
 use crate::config::WorldConfig;
-use crate::math::{scalar, Aabb};
+use crate::math::{scalar, Aabb, Vec3};
 
 /// Category bit of a static body's leaf.
 const STATIC: u8 = 0b001;
@@ -458,11 +461,34 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
         }
         let tight = grown(movement_bounds(&body.shape, &motion, cfg.dt));
         if !body.fat.contains(&tight) {
-            body.fat = tight.expanded(cfg.aabb_margin);
+            body.fat = tight
+                .union(&tight.translated(look_ahead(body, &motion, cfg.dt)))
+                .expanded(cfg.aabb_margin);
             body.moved = true;
         }
     }
 }
+
+/// How far ahead (m) a body's new enlarged box reaches beyond this step's movement: the
+/// step's displacement `v dt` taken [`LOOK_AHEAD_STEPS`] times more, at most the body's
+/// bounding radius (Box2D v2's `aabbMultiplier`). A body in steady motion (a falling
+/// pile) then leaves its box every few steps instead of every step; the length cap keeps
+/// a fast small body (a bullet) from dragging a long box through the world.
+fn look_ahead(body: &Body<'_>, motion: &Motion, dt: f32) -> Vec3 {
+    let d = motion.linear * (LOOK_AHEAD_STEPS * scalar::abs(dt));
+    let cap = body.bounding_radius;
+    let l2 = d.length_squared();
+    if l2 <= cap * cap {
+        return d;
+    }
+    if !l2.is_finite() || cap.is_nan() || cap <= 0.0 {
+        return Vec3::ZERO;
+    }
+    d * (cap / scalar::sqrt(l2))
+}
+
+/// Steps of motion a new enlarged box looks ahead ([`look_ahead`]).
+const LOOK_AHEAD_STEPS: f32 = 2.0;
 
 /// The box `body` covers over the next step (without the margins): its velocity plus
 /// what gravity and the accumulated force add in the step.
@@ -836,6 +862,46 @@ mod tests {
             world.step();
         }
         assert_eq!(world.broad.work, work, "tree work while everything sleeps");
+    }
+
+    /// A body in steady motion leaves its enlarged box every few steps, not every step:
+    /// a ball falling at 6 m/s without gravity (10 cm per step, twice the `aabb_margin`)
+    /// gets a new box every third step (8 of 24; without the look-ahead, every step),
+    /// each reaching 20 cm further down (two steps' motion, within its 0.5 m radius); a
+    /// small fast ball's look-ahead stops at its radius.
+    #[test]
+    fn steady_motion_refreshes_the_box_every_few_steps() {
+        let mut cfg = WorldConfig::DEFAULT;
+        cfg.gravity = Vec3::ZERO;
+        let mut bodies: Pool<Body<'static>, 4> = Pool::new();
+        let mut ball = body(BodyKind::Dynamic, Vec3::new(0.0, 10.0, 0.0), 0.5);
+        ball.linear_velocity = Vec3::new(0.0, -6.0, 0.0);
+        let slot = bodies.insert(ball).unwrap();
+        let mut refreshed = 0;
+        for _ in 0..24 {
+            update_fat_boxes(&mut bodies, &cfg);
+            let b = bodies.get_mut(slot).unwrap();
+            if b.moved {
+                refreshed += 1;
+                // Below: this step's 10 cm, two more steps' 20 cm, both margins.
+                let below = b.world_center().y - 0.5 - b.fat.min.y;
+                let want = 0.1 + 0.2 + cfg.speculative_margin + cfg.aabb_margin;
+                assert!((below - want).abs() < 1e-4, "below {below}, want {want}");
+                b.moved = false;
+            }
+            let p = b.world_center() + b.linear_velocity * cfg.dt;
+            b.place(crate::math::Iso::from_position(p));
+        }
+        assert_eq!(refreshed, 8);
+        // A bullet: 0.05 m radius at 500 m/s looks ahead 0.05 m, not 16.7 m.
+        let mut bullet = body(BodyKind::Dynamic, Vec3::ZERO, 0.05);
+        bullet.linear_velocity = Vec3::new(500.0, 0.0, 0.0);
+        let (motion, _) = body_motion(&bullet, &cfg);
+        let d = look_ahead(&bullet, &motion, cfg.dt);
+        assert!((d.length() - 0.05).abs() < 1e-6 && d.x > 0.0, "{d:?}");
+        bullet.linear_velocity = Vec3::new(f32::NAN, 0.0, 0.0);
+        let (motion, _) = body_motion(&bullet, &cfg);
+        assert_eq!(look_ahead(&bullet, &motion, cfg.dt), Vec3::ZERO);
     }
 
     /// A spinning body's box covers its shape at the end of any part of the step, with
