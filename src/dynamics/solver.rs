@@ -382,28 +382,27 @@ fn place_in_colour_order<const C: usize>(
         *k = *n / 4 * 4;
     }
     // Slot of an entry: `colour · POINT_CLASSES + class` for one that stays, the last
-    // slot for the overflow colour. First pass: how many entries each slot gets.
+    // slot for the overflow colour. First pass: each entry's slot (in its first
+    // component) and how many entries each slot gets.
     const SLOTS: usize = wide::COLORS * POINT_CLASSES + 1;
-    let slot_of = |seen: &mut [u32; wide::COLORS + 1], entry: &(u32, u32)| {
+    let mut in_slot = [0u32; SLOTS];
+    let mut seen = [0u32; wide::COLORS + 1];
+    for entry in scratch.iter_mut() {
         let c = (entry.0 as usize).min(overflow);
         let place = seen.get(c).copied().unwrap_or(0);
         if let Some(s) = seen.get_mut(c) {
             *s += 1;
         }
         let stays = c != overflow && place < keep.get(c).copied().unwrap_or(0);
-        if stays {
-            (c, c * POINT_CLASSES + class(entry.1).min(POINT_CLASSES - 1))
+        let slot = if stays {
+            c * POINT_CLASSES + class(entry.1).min(POINT_CLASSES - 1)
         } else {
-            (overflow, SLOTS - 1)
-        }
-    };
-    let mut in_slot = [0u32; SLOTS];
-    let mut seen = [0u32; wide::COLORS + 1];
-    for entry in scratch.iter() {
-        let (_, slot) = slot_of(&mut seen, entry);
+            SLOTS - 1
+        };
         if let Some(n) = in_slot.get_mut(slot) {
             *n += 1;
         }
+        entry.0 = slot as u32;
     }
     let mut offset = [0u32; SLOTS];
     let mut at = 0u32;
@@ -412,9 +411,13 @@ fn place_in_colour_order<const C: usize>(
         at += *n;
     }
     // Destinations, packed with the final colour: `colour << 24 | destination`.
-    let mut seen = [0u32; wide::COLORS + 1];
     for entry in scratch.iter_mut() {
-        let (colour, slot) = slot_of(&mut seen, entry);
+        let slot = (entry.0 as usize).min(SLOTS - 1);
+        let colour = if slot == SLOTS - 1 {
+            overflow
+        } else {
+            slot / POINT_CLASSES
+        };
         let dest = offset.get(slot).copied().unwrap_or(0);
         if let Some(o) = offset.get_mut(slot) {
             *o += 1;
