@@ -338,14 +338,13 @@ fn closes_within(separation: f32, approach: f32, dt: f32) -> bool {
     separation <= 0.0 || approach * dt > separation
 }
 
-/// True when one body of the contact is static or kinematic.
-pub(crate) fn has_rigid_partner<const N: usize>(c: &Contact, bodies: &Pool<Body<'_>, N>) -> bool {
-    let rigid = |s: u32| {
-        bodies
-            .at(s as usize)
-            .is_none_or(|b| b.kind != BodyKind::Dynamic)
-    };
-    rigid(c.a) || rigid(c.b)
+/// True when the body in pool slot `slot` is static or kinematic (or missing): one side
+/// of a contact with a rigid partner, which the plan visits after the others.
+#[inline]
+pub(crate) fn is_rigid<const N: usize>(slot: u32, bodies: &Pool<Body<'_>, N>) -> bool {
+    bodies
+        .at(slot as usize)
+        .is_none_or(|b| b.kind != BodyKind::Dynamic)
 }
 
 /// `1 / k` for `k > 0` finite, else 0 (nothing moves along that row). The scalar oracle

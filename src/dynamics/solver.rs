@@ -243,7 +243,11 @@ fn plan<const N: usize, const C: usize>(
             let (m_a, m_b) = (mass(ia), mass(ib));
             heavy = m_a > 0.0 && m_b > 0.0 && support::heavy_pair(m_a, m_b);
         }
-        let class = u32::from(contact_solver::has_rigid_partner(c, bodies)) << 31;
+        // A body that moves in the solve is dynamic: only the others need a look at the
+        // pool (a pile's contacts between two moving bodies need none).
+        let rigid =
+            |slot: u32, i: u32| !moves(&solver.bodies, i) && contact_solver::is_rigid(slot, bodies);
+        let class = u32::from(rigid(c.a, ia) || rigid(c.b, ib)) << 31;
         // Part contacts of one pair differ by `sub` (0 for a convex pair: its own key).
         let sub = u64::from(c.sub).wrapping_mul(0x9e37_79b9_7f4a_7c15);
         let key = class | (pair_hash(c.key() ^ sub) >> 1);
