@@ -367,9 +367,11 @@ fn point_class(contacts: &[Contact], ci: u32) -> usize {
 /// themselves). On return each entry's first component is its final colour.
 ///
 /// The contacts of one colour share no moving body, so the order among them changes no
-/// velocity, no position and no bit; ordering them by point count packs groups whose
-/// contacts have the same number of points, which run the kernel of that many point
-/// rows instead of the largest count among four mixed contacts (`wide.rs`).
+/// velocity and no position (beyond what the shorter kernels already allow: an empty
+/// point row left out can at most turn a velocity component of −0 into +0, `wide.rs`);
+/// ordering them by point count packs groups whose contacts have the same number of
+/// points, which run the kernel of that many point rows instead of the largest count
+/// among four mixed contacts.
 ///
 /// The order is that of a stable sort by (final colour, class), built without sorting:
 /// every entry's destination is its slot's offset plus its place among the slot's
