@@ -476,15 +476,7 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
 /// a fast small body (a bullet) from dragging a long box through the world.
 fn look_ahead(body: &Body<'_>, motion: &Motion, dt: f32) -> Vec3 {
     let d = motion.linear * (LOOK_AHEAD_STEPS * scalar::abs(dt));
-    let cap = body.bounding_radius;
-    let l2 = d.length_squared();
-    if l2 <= cap * cap {
-        return d;
-    }
-    if !l2.is_finite() || cap.is_nan() || cap <= 0.0 {
-        return Vec3::ZERO;
-    }
-    d * (cap / scalar::sqrt(l2))
+    clamp_length(d, body.bounding_radius)
 }
 
 /// Steps of motion a new enlarged box looks ahead ([`look_ahead`]).
