@@ -112,7 +112,8 @@
 //!   not frame times from a clock (step a fixed number of times, or use
 //!   [`FixedTimestep`] with the same frame times on every peer), not results of the
 //!   platform's `sin`/`cos`/`sqrt` or of fused multiply-adds that differ by target
-//!   (compute them with [`math::scalar`], which is libm's software code on every target,
+//!   (compute them with [`math::scalar`], which is libm's code on every target but the
+//!   square root of an x86 build with AVX, the same correctly rounded root,
 //!   or send the inputs, not the results),
 //!   not values from an unordered container's iteration order.
 //! - **Step, do not interpolate, the state you compare.** [`FrameSteps::alpha`] is
