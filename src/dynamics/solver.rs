@@ -304,6 +304,7 @@ fn plan<const N: usize, const C: usize>(
         marks: &solver.marks,
         gravity: cfg.gravity,
     };
+    let mut inputs = wide::PrepareInputs::default();
     let mut prepare = |g: usize, batch: &[u32; 4]| {
         let Some(mut group) = store.group(g) else {
             return;
@@ -313,10 +314,16 @@ fn plan<const N: usize, const C: usize>(
         let soft = &softness;
         if heavy {
             let sup = &supports;
-            wide::prepare_group::<N, true>(group, batch, contacts, bodies, sb, si, soft, sup, cfg);
+            let x = &mut inputs;
+            wide::prepare_group::<N, true>(
+                x, group, batch, contacts, bodies, sb, si, soft, sup, cfg,
+            );
         } else {
             let sup = &support::Supports::NONE;
-            wide::prepare_group::<N, false>(group, batch, contacts, bodies, sb, si, soft, sup, cfg);
+            let x = &mut inputs;
+            wide::prepare_group::<N, false>(
+                x, group, batch, contacts, bodies, sb, si, soft, sup, cfg,
+            );
         }
     };
     for &(colour, ci) in scratch.iter() {

@@ -51,7 +51,7 @@ use crate::config::WorldConfig;
 use crate::math::lanes::{F4, V4};
 use crate::math::Vec3;
 
-pub(crate) use prepare::prepare_group;
+pub(crate) use prepare::{prepare_group, Inputs as PrepareInputs};
 
 /// Colours of the constraint graph, overflow excluded (Box2D v3's count). At most 32: a
 /// solver body's colours are the bits of a `u32`.
