@@ -43,6 +43,9 @@ use crate::shape::{HeightField, Triangle, TriangleMesh};
 /// triangles are much smaller than it reaches this; the rest are dropped and counted).
 pub const MAX_PAIR_PARTS: usize = 128;
 
+// A record counts the part contacts it adds in a `u8` (`Contact::new_parts`).
+const _: () = assert!(MAX_PAIR_PARTS <= u8::MAX as usize);
+
 /// The two convex parts of a part contact, each with its pose in its body's frame (`None`
 /// when the part's frame is the body's: a convex body, a mesh triangle).
 #[derive(Clone, Copy, Debug)]
@@ -93,9 +96,10 @@ pub(crate) fn part_pair<'a>(a: &Shape<'a>, b: &Shape<'a>, sub: u32) -> Option<Pa
     })
 }
 
-/// True when two parts (convex shapes at their world poses) are certainly farther apart
-/// than `margin`, so their narrow phase would find no point: judged by the ball about
-/// each convex part's origin (radius [`Shape::bounding_radius`]) and, for a triangle, by
+/// A lower bound (m) of the distance between two parts (convex shapes at their world
+/// poses) when they are certainly farther apart than `margin`, so their narrow phase
+/// would find no point; `None` when they may come within `margin`. Judged by the ball
+/// about each convex part's origin (radius [`Shape::bounding_radius`]) and, for a triangle, by
 /// the exact closest point on it. A part group runs its narrow phase on every part whose
 /// box meets the other body's enlarged box; on terrain most of those are a neighbouring
 /// cell's triangles that a body only overhangs (`mesh_pile`: 46 % of the calls, none of
@@ -106,7 +110,7 @@ pub(crate) fn beyond_reach(
     b: &Shape<'_>,
     pose_b: &Iso,
     margin: f32,
-) -> bool {
+) -> Option<f32> {
     // (distance between the balls' or the ball's and the triangle's nearest points, the
     // size of the numbers it was computed from)
     let (gap, scale) = match (a, b) {
@@ -118,9 +122,10 @@ pub(crate) fn beyond_reach(
             (d.length() - radii, d.abs().max_elem() + radii)
         }
     };
-    // The gap is exact to rounding of those numbers; a relative guard keeps the test on
-    // the safe side of it.
-    gap > margin + REACH_GUARD * (1.0 + scale)
+    // The gap is exact to rounding of those numbers; a relative guard keeps the test and
+    // the bound on the safe side of it.
+    let guard = REACH_GUARD * (1.0 + scale);
+    (gap > margin + guard).then_some(gap - guard)
 }
 
 /// Relative rounding guard of [`beyond_reach`].
@@ -249,13 +254,14 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
             }
             if sub == RECORD {
                 let missing = match current {
-                    Some((_, found)) => list.len().saturating_sub(found) as u32,
+                    // At most MAX_PAIR_PARTS (the list's capacity): fits in a u8.
+                    Some((_, found)) => list.len().saturating_sub(found) as u8,
                     None => 0,
                 };
                 if let Some(c) = slots.get_mut(read) {
                     c.new_parts = missing;
                 }
-                missing_total += missing as usize;
+                missing_total += usize::from(missing);
                 current = None;
             } else if let Some((_, found)) = current.as_mut() {
                 if list.binary_search(&sub).is_ok() {
@@ -283,8 +289,8 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
                     break;
                 }
                 if c.is_record() {
-                    let cut = (c.new_parts as usize).min(excess);
-                    c.new_parts -= cut as u32;
+                    let cut = usize::from(c.new_parts).min(excess);
+                    c.new_parts -= cut as u8;
                     excess -= cut;
                     dropped = dropped.saturating_add(cut as u32);
                 }
@@ -364,7 +370,7 @@ fn add_missing<const N: usize, const C: usize>(
         let Some(c) = slots.get_mut(write) else {
             break;
         };
-        let wanted = c.new_parts as usize;
+        let wanted = usize::from(c.new_parts);
         c.new_parts = 0;
         if !c.is_record() || wanted == 0 {
             continue;
@@ -755,8 +761,8 @@ mod tests {
     use crate::shape::ConvexHull;
 
     /// `beyond_reach` against the exact queries: whenever it skips a part pair, the
-    /// manifold with that margin has no point and GJK's distance exceeds the margin; and
-    /// it does skip many (a test that never skips would pass).
+    /// manifold with that margin has no point, GJK's distance exceeds the margin and the
+    /// bound it gives; and it does skip many (a test that never skips would pass).
     #[test]
     fn beyond_reach_skips_only_pairs_without_contact() {
         let mut rng = SplitMix64::new(9);
@@ -788,18 +794,22 @@ mod tests {
             } else {
                 ((shape, pose_s), (tri, pose_t))
             };
-            let skip = beyond_reach(&first.0, &first.1, &second.0, &second.1, margin);
+            let kept = beyond_reach(&first.0, &first.1, &second.0, &second.1, margin);
             let m = contact(&first.0, &first.1, &second.0, &second.1, margin).unwrap();
             let points = m.map_or(0, |m| m.len);
             let gap = distance(&tri, &pose_t, &shape, &pose_s, &mut SimplexCache::default())
                 .unwrap()
                 .distance;
-            if skip {
+            if let Some(kept) = kept {
                 skipped += 1;
                 assert_eq!(points, 0, "pair {i} skipped with points");
                 assert!(
                     gap > margin,
                     "pair {i} skipped at distance {gap} <= {margin}"
+                );
+                assert!(
+                    kept <= gap,
+                    "pair {i}: bound {kept} above the distance {gap}"
                 );
             }
             touching += usize::from(points > 0);

@@ -710,6 +710,7 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
         twist_impulse,
         sticking,
         sat_cache: crate::collide::PairCache::default(),
+        apart_gap: 0.0,
     })
 }
 
