@@ -2016,6 +2016,15 @@ pub(crate) fn capsule_triangle(
         // Through an edge or a vertex (within rounding): the closest pair below has a gap
         // of rounding size, and the guard on it falls back.
     }
+    let tol = SAT_TOLERANCE
+        * (b_in_a.position.abs().max_elem() + tri.extent() + c.half_height + c.radius);
+    // Both ends on one side of the plane and higher above it than the radius and the
+    // margin: the closest pair below is at least that far apart, so it would answer
+    // `Separated`; answered at once, with the guard that covers the rounding of both.
+    let height = scalar::min(scalar::abs(h0), scalar::abs(h1));
+    if h0 * h1 > 0.0 && height - r > margin + GUARD_FACTOR * tol {
+        return SatOutcome::Separated;
+    }
     // (squared gap, segment parameter, segment point, triangle point, triangle feature);
     // ends first, then edges in order, strict `<`.
     let mut best: Option<(f32, f32, Vec3, Vec3, FeatureId)> = None;
@@ -2047,8 +2056,6 @@ pub(crate) fn capsule_triangle(
     let Some((_, s, on_segment, on_tri, feature)) = best else {
         return SatOutcome::Fallback;
     };
-    let tol = SAT_TOLERANCE
-        * (b_in_a.position.abs().max_elem() + tri.extent() + c.half_height + c.radius);
     let Some((toward, gap)) = (on_tri - on_segment).normalize_and_length() else {
         return SatOutcome::Fallback;
     };
