@@ -557,6 +557,14 @@ fn update_group(
         for c in group.iter_mut() {
             reuse(c, a, b, cfg, None);
         }
+        // A group that starts touching on a reuse is due its hit, as a rebuilt one is:
+        // the closing speeds of its points, which only then are read.
+        if group.iter().any(|c| c.touching) && !was_touching {
+            for c in group.iter_mut().filter(|c| c.len > 0 && !c.sensor) {
+                set_approach_speeds(c, a, b);
+                c.hit_due = true;
+            }
+        }
         return;
     }
     // The group's points and friction patches before the rebuild.
@@ -1029,17 +1037,25 @@ fn reuse(
         }
     }
     // Closing speeds are read by hit events only: a convex pair with points is due one
-    // when it starts touching (`update_one`); a part contact whenever its group is.
-    if c.is_part() || (c.touching && !was_touching) {
-        let (center_a, center_b) = (body_a.world_center(), body_b.world_center());
-        for p in c.points.iter_mut().take(len) {
-            let p_a = body_a.pose().transform_point(p.local_a);
-            let p_b = body_b.pose().transform_point(p.local_b);
-            let mid = (p_a + p_b) * 0.5;
-            let v_a = body_a.linear_velocity + body_a.angular_velocity.cross(mid - center_a);
-            let v_b = body_b.linear_velocity + body_b.angular_velocity.cross(mid - center_b);
-            p.approach_speed = (v_a - v_b).dot(n);
-        }
+    // when it starts touching (`update_one`); a part contact when its group starts
+    // touching (`update_group` forms them then).
+    if !c.is_part() && c.touching && !was_touching {
+        set_approach_speeds(c, body_a, body_b);
+    }
+}
+
+/// The closing speed `(v_a(p) − v_b(p))·n` of each point of `c` (m/s), at the midpoint
+/// `p` of its two anchors at the bodies' current poses, with their velocities now.
+fn set_approach_speeds(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>) {
+    let n = c.normal;
+    let (center_a, center_b) = (body_a.world_center(), body_b.world_center());
+    for p in c.points.iter_mut().take(usize::from(c.len)) {
+        let p_a = body_a.pose().transform_point(p.local_a);
+        let p_b = body_b.pose().transform_point(p.local_b);
+        let mid = (p_a + p_b) * 0.5;
+        let v_a = body_a.linear_velocity + body_a.angular_velocity.cross(mid - center_a);
+        let v_b = body_b.linear_velocity + body_b.angular_velocity.cross(mid - center_b);
+        p.approach_speed = (v_a - v_b).dot(n);
     }
 }
 
