@@ -66,7 +66,7 @@
 //! for rounding, exceeds the build's margin, a build would find the part beyond reach
 //! again, and the rebuild writes that empty result without forming the triangle, keeping
 //! the smaller bound for the new place (`mesh_pile`: about three in four reach tests
-//! skipped, 2.5 % of the step's instructions). Only ever a shortcut to the same bits, so
+//! skipped, 2.3 % of the step's instructions). Only ever a shortcut to the same bits, so
 //! derived state: not in snapshots or checksums; a restored world, which starts without
 //! it, builds those parts instead and goes on identically.
 //!
