@@ -27,8 +27,8 @@
 //! collision (Catto, GDC 2013). It is part of continuous collision: when no dynamic body
 //! of the pair has `ccd` on, `w` is 0 and fast bodies may tunnel. A full narrow phase stores the relative pose `b_in_a` it ran at and the
 //! margin it used, `margin + slack`, with the pair's slack
-//! ([`crate::config::reuse_slack`]: one slop, four for a pair with a convex hull, whose
-//! manifold costs about ten times more to build, and for a box on a mesh triangle, whose
+//! ([`crate::config::reuse_slack`]: one slop, six for a pair with a convex hull, whose
+//! manifold costs about ten times more to build, four for a box on a mesh triangle, whose
 //! group of parts is rebuilt whole; none for two spheres, "Sphere pairs" below). While the relative pose has moved by
 //! `drift = |Δt| + 2 sin(θ/2) R_b ≤ slack` (θ the angle of the relative turn; no
 //! point of B moved more than that in A's frame) and `margin + drift ≤ built margin`,
