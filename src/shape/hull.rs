@@ -461,15 +461,51 @@ impl ConvexHull {
         self.face(best)
     }
 
+    /// The world box of the hull at `pose`: its faces are the hull's supports along the
+    /// world axes, `t_k + min / max_v v · r_k` with `r_k = Rᵀ e_k` (row `k` of the
+    /// rotation matrix) world axis `k` seen in the hull's frame. Three passes of
+    /// [`ConvexHull::dot_range`] over the vertex lanes instead of turning every vertex by
+    /// the quaternion (a fifth of the work for 16 vertices); the box differs from the
+    /// turned vertices' box by rounding only (a few units in the last place).
     pub(crate) fn aabb(&self, pose: &Iso) -> Aabb {
-        let vs = self.vertices();
-        let p0 = pose.transform_point(vs.first().copied().unwrap_or(Vec3::ZERO));
-        let mut b = Aabb::new(p0, p0);
-        for v in vs {
-            let p = pose.transform_point(*v);
-            b = Aabb::new(b.min.min(p), b.max.max(p));
+        let r = Mat3::from_quat(pose.rotation);
+        let (x0, x1) = self.dot_range(r.row(0));
+        let (y0, y1) = self.dot_range(r.row(1));
+        let (z0, z1) = self.dot_range(r.row(2));
+        Aabb::new(
+            pose.position + Vec3::new(x0, y0, z0),
+            pose.position + Vec3::new(x1, y1, z1),
+        )
+    }
+
+    /// The smallest and largest `v · dir` over the vertices, in one pass over
+    /// [`ConvexHull::vertex_lanes`] (four running minima and maxima, merged as in
+    /// [`ConvexHull::min_dot`]).
+    fn dot_range(&self, dir: Vec3) -> (f32, f32) {
+        #[inline(always)]
+        fn lower(best: &mut f32, d: f32) {
+            *best = if d < *best { d } else { *best };
         }
-        b
+        #[inline(always)]
+        fn upper(best: &mut f32, d: f32) {
+            *best = if d > *best { d } else { *best };
+        }
+        let d = V4::splat(dir);
+        let mut low = F4::splat(f32::INFINITY);
+        let mut high = F4::splat(f32::NEG_INFINITY);
+        for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
+            let p = group.dot(&d);
+            low = low.gt_select(p, p, low);
+            high = p.gt_select(high, p, high);
+        }
+        let ([mut l0, l1, mut l2, l3], [mut h0, h1, mut h2, h3]) = (low.0, high.0);
+        lower(&mut l0, l1);
+        lower(&mut l2, l3);
+        lower(&mut l0, l2);
+        upper(&mut h0, h1);
+        upper(&mut h2, h3);
+        upper(&mut h0, h2);
+        (l0, h0)
     }
 
     pub(crate) fn bounding_radius(&self) -> f32 {
@@ -1912,6 +1948,53 @@ mod tests {
             }
         }
         best as u32
+    }
+
+    /// The box from the lane passes holds every vertex turned by the quaternion and
+    /// touches the extreme ones, within rounding (1e-6 of the coordinates' size), for
+    /// random hulls at random poses, and is exact for an unturned hull.
+    #[test]
+    fn the_lane_box_is_the_box_of_the_turned_vertices() {
+        let mut rng = SplitMix64::new(36);
+        for n in 4..40 {
+            let pts: std::vec::Vec<Vec3> = (0..n)
+                .map(|_| rng.unit_vector() * rng.range(0.1, 3.0))
+                .collect();
+            let Ok(h) = ConvexHull::new(&pts) else {
+                continue;
+            };
+            for _ in 0..20 {
+                let pose = Iso::new(
+                    Vec3::new(
+                        rng.range(-50.0, 50.0),
+                        rng.range(-50.0, 50.0),
+                        rng.range(-50.0, 50.0),
+                    ),
+                    rng.rotation(),
+                );
+                let turned = h.vertices().iter().map(|v| pose.transform_point(*v));
+                let first = pose.transform_point(h.vertices()[0]);
+                let oracle = turned.fold(Aabb::new(first, first), |b, p| {
+                    Aabb::new(b.min.min(p), b.max.max(p))
+                });
+                let b = h.aabb(&pose);
+                let tol = 1.0e-6 * (pose.position.abs().max_elem() + 3.0);
+                assert!(
+                    (b.min - oracle.min).abs().max_elem() <= tol,
+                    "{b:?} {oracle:?}"
+                );
+                assert!(
+                    (b.max - oracle.max).abs().max_elem() <= tol,
+                    "{b:?} {oracle:?}"
+                );
+            }
+            let still = h.aabb(&Iso::IDENTITY);
+            let first = h.vertices()[0];
+            let exact = h.vertices().iter().fold(Aabb::new(first, first), |b, v| {
+                Aabb::new(b.min.min(*v), b.max.max(*v))
+            });
+            assert_eq!(still, exact);
+        }
     }
 
     #[test]
