@@ -182,8 +182,9 @@ pub(crate) struct Contact {
     pub built_margin: f32,
     /// Scratch of one update: a hit event is due (see the module docs).
     pub hit_due: bool,
-    /// Scratch of the mid phase, on a record: how many part contacts it adds this step
-    /// (at most `mid_phase::MAX_PAIR_PARTS`).
+    /// Scratch of the mid phase's update of the part contacts (`mid_phase::update_parts`):
+    /// how many new part contacts come just before this one, or a mark that it goes; on
+    /// a record, in its two-pass form, how many part contacts it adds. 0 between steps.
     pub new_parts: u8,
     /// The separating axis test's memory of this pair: only ever a shortcut to the same
     /// answer, so it is derived state (not in snapshots or checksums; fresh after restore).

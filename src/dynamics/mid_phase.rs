@@ -224,6 +224,12 @@ pub(crate) fn candidates(a: &Body<'_>, b: &Body<'_>, out: &mut HVec<u32, MAX_PAI
 /// Stage 4 over every pair with a mesh or compound (module docs): part contacts no
 /// longer listed are removed, new ones added with no points, in key order. Pairs of
 /// convex shapes pass through untouched.
+///
+/// Each contact that stays is copied at most once, straight to its new slot
+/// ([`plan_relocation`], then [`relocate`]); a step with more new part contacts or
+/// more runs of contacts moving up than the plan holds, or with more new part contacts
+/// than the buffer has room for, takes [`update_parts_in_two_passes`] instead (the
+/// same result).
 pub(crate) fn update_parts<const N: usize, const C: usize>(
     contacts: &mut HVec<Contact, C>,
     bodies: &Pool<Body<'_>, N>,
@@ -232,6 +238,180 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
     if !contacts.iter().any(Contact::is_record) {
         return;
     }
+    let mut list: HVec<u32, MAX_PAIR_PARTS> = HVec::new();
+    match plan_relocation(contacts.as_mut_slice(), C, bodies, &mut list) {
+        Some(plan) => {
+            relocate(contacts, &plan);
+            report.dropped_contacts = report.dropped_contacts.saturating_add(plan.dropped);
+        }
+        None => {
+            // The plan's marks are undone; its lists are formed again (and its drops
+            // counted once, there).
+            for c in contacts.iter_mut() {
+                c.new_parts = 0;
+            }
+            update_parts_in_two_passes(contacts, bodies, report);
+        }
+    }
+}
+
+/// [`Contact::new_parts`] of a part contact that goes, while an update is planned
+/// ([`plan_relocation`]); any other contact holds there how many new part contacts
+/// come just before it (at most [`MAX_PAIR_PARTS`]).
+const GOES: u8 = u8::MAX;
+
+const _: () = assert!(MAX_PAIR_PARTS < GOES as usize);
+
+/// Most new part contacts a [`Relocation`] holds (a step of `mesh_pile` adds a few
+/// dozen).
+const RELOCATE_NEW: usize = 128;
+
+/// Most runs of contacts moving up a [`Relocation`] holds.
+const RELOCATE_RUNS: usize = 64;
+
+/// The moves of one update of the part contacts ([`plan_relocation`]). With `dest(i)`
+/// the slot contact `i` ends in, the map is increasing, so contacts moving down can be
+/// copied in slot order and those moving up in reverse slot order, each straight to its
+/// slot, without overwriting one that has not moved yet.
+struct Relocation {
+    /// Contacts after the update.
+    total: usize,
+    /// Each new part contact: its slot, the slot its pair's record ends in, its part key.
+    new: HVec<[u32; 3], RELOCATE_NEW>,
+    /// Runs of contacts moving up: first slot, end slot (exclusive), how many slots up.
+    up: HVec<[u32; 3], RELOCATE_RUNS>,
+    /// Pairs whose list did not fit.
+    dropped: u32,
+}
+
+/// Plan an update (pass 1, forward; nothing moves): mark each part contact that goes
+/// ([`GOES`]) and write into every other how many new part contacts come just before
+/// it: the pair's listed parts that no contact holds, below it and above the pair's
+/// last contact that stays (for a record, all those left). `None` when the plan does
+/// not fit ([`RELOCATE_NEW`], [`RELOCATE_RUNS`]) or the update would hold more than
+/// `capacity` contacts.
+fn plan_relocation<const N: usize>(
+    slots: &mut [Contact],
+    capacity: usize,
+    bodies: &Pool<Body<'_>, N>,
+    list: &mut HVec<u32, MAX_PAIR_PARTS>,
+) -> Option<Relocation> {
+    let mut plan = Relocation {
+        total: 0,
+        new: HVec::new(),
+        up: HVec::new(),
+        dropped: 0,
+    };
+    // The pair whose list is in `list`, and the next list entry to match.
+    let mut current: Option<(u64, usize)> = None;
+    // Where the current pair's new part contacts start in `plan.new`.
+    let mut pair_new = 0usize;
+    // The slot after the last contact that stays, and the new part contacts placed
+    // since (they come before the next contact that stays: the pair's record at last).
+    let mut pos = 0usize;
+    let mut before = 0usize;
+    for (i, c) in slots.iter_mut().enumerate() {
+        let (key, sub) = (c.key(), c.sub);
+        if sub != 0 {
+            if current.is_none_or(|(k, _)| k != key) {
+                current = listed(c.a, c.b, bodies, list, &mut plan.dropped).map(|_| (key, 0));
+                pair_new = plan.new.len();
+            }
+            if let Some((_, next)) = current.as_mut() {
+                while let Some(&listed_sub) = list.get(*next) {
+                    if listed_sub >= sub {
+                        break;
+                    }
+                    plan.new.push([(pos + before) as u32, 0, listed_sub]).ok()?;
+                    before += 1;
+                    *next += 1;
+                }
+                if sub == RECORD {
+                    let record = (pos + before) as u32;
+                    for e in plan.new.iter_mut().skip(pair_new) {
+                        e[1] = record;
+                    }
+                    current = None;
+                } else if list.get(*next) == Some(&sub) {
+                    *next += 1;
+                } else {
+                    c.new_parts = GOES;
+                    continue;
+                }
+            }
+        }
+        // At most the list's length: below `GOES`.
+        c.new_parts = before as u8;
+        let dest = pos + before;
+        pos = dest + 1;
+        before = 0;
+        if dest > i {
+            let shift = (dest - i) as u32;
+            match plan.up.last_mut() {
+                Some(run) if run[1] == i as u32 && run[2] == shift => run[1] += 1,
+                _ => plan.up.push([i as u32, i as u32 + 1, shift]).ok()?,
+            }
+        }
+    }
+    plan.total = pos;
+    (pos <= capacity).then_some(plan)
+}
+
+/// Carry out `plan` (made by [`plan_relocation`] on `contacts` as they are): pass 2,
+/// forward, copies each contact that moves down to its slot and clears every mark;
+/// pass 3 copies the runs that move up, last first, each from its end; then each new
+/// part contact is written to its slot with its record's bodies and material, and the
+/// buffer takes its new length.
+fn relocate<const C: usize>(contacts: &mut HVec<Contact, C>, plan: &Relocation) {
+    let len = contacts.len();
+    let slots = contacts.as_mut_slice();
+    let mut pos = 0usize;
+    for i in 0..len {
+        let Some(c) = slots.get_mut(i) else {
+            break;
+        };
+        let before = c.new_parts;
+        if before == GOES {
+            continue;
+        }
+        c.new_parts = 0;
+        let dest = pos + usize::from(before);
+        pos = dest + 1;
+        if dest < i {
+            move_down(slots, i, dest);
+        }
+    }
+    for _ in len..plan.total {
+        // Cannot fail: the plan checked the capacity.
+        let _ = contacts.push(Contact::default());
+    }
+    let slots = contacts.as_mut_slice();
+    for &[start, end, shift] in plan.up.iter().rev() {
+        for i in (start..end).rev() {
+            move_up(slots, i as usize, (i + shift) as usize);
+        }
+    }
+    for &[slot, record, sub] in plan.new.iter() {
+        let Some(r) = slots.get(record as usize) else {
+            continue;
+        };
+        let (a, b, material, sensor) = (r.a, r.b, r.material, r.sensor);
+        if let Some(dst) = slots.get_mut(slot as usize) {
+            *dst = Contact::new_pair(a, b, material, sensor);
+            dst.sub = sub;
+        }
+    }
+    contacts.truncate(plan.total);
+}
+
+/// [`update_parts`] in two passes, each contact copied up to twice: pass 1 compacts away
+/// the part contacts no longer listed, pass 2 ([`add_missing`]) opens room for the new
+/// ones from the end. It handles a full buffer (the lowest keys are kept).
+fn update_parts_in_two_passes<const N: usize, const C: usize>(
+    contacts: &mut HVec<Contact, C>,
+    bodies: &Pool<Body<'_>, N>,
+    report: &mut StepReport,
+) {
     let mut list: HVec<u32, MAX_PAIR_PARTS> = HVec::new();
     let mut dropped = 0u32;
     // Pass 1, forward: compact away the part contacts no longer listed; each record
@@ -759,6 +939,94 @@ mod tests {
     use crate::collide::{contact, distance, SimplexCache};
     use crate::rng::SplitMix64;
     use crate::shape::ConvexHull;
+
+    /// The single-move update against the two-pass one, on both terrain scenes (a height
+    /// field and a mesh under 40 mixed bodies) and the same scene packed into a contact
+    /// buffer too small for it: in every step, after its enlarged boxes are refreshed,
+    /// both run on copies of the world's contacts and give the same contacts, bit for
+    /// bit, and the same drop count. The
+    /// plan must carry most updates that change anything, and the small buffer must send
+    /// some to the two passes.
+    #[test]
+    fn the_single_move_update_is_the_two_pass_update() {
+        use crate::scenes::{self, ReferenceWorld, Scene, TerrainData};
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn(|| {
+                let mut hulls = std::vec![
+                    ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
+                    scenes::REFERENCE_HULLS
+                ];
+                scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
+                let mut terrain: std::boxed::Box<TerrainData> = std::boxed::Box::default();
+                let shapes = terrain.shapes().unwrap();
+                fn compare<const B: usize, const C: usize, const E: usize>(
+                    world: &mut crate::World<'_, B, C, E>,
+                    steps: u32,
+                ) -> (u32, u32, u32) {
+                    let (mut changed, mut planned, mut fallback) = (0, 0, 0);
+                    for _ in 0..steps {
+                        // Stage 4's input: the enlarged boxes of this step (stage 2; the
+                        // step's own pass then finds nothing left to refresh).
+                        let cfg = *world.config();
+                        crate::dynamics::broad_phase::update_fat_boxes(&mut world.bodies, &cfg);
+                        let mut single = world.contacts.clone();
+                        let mut twice = world.contacts.clone();
+                        let (mut r1, mut r2) = (StepReport::default(), StepReport::default());
+                        let mut probe = world.contacts.clone();
+                        let mut list = HVec::new();
+                        let plan =
+                            plan_relocation(probe.as_mut_slice(), C, &world.bodies, &mut list);
+                        update_parts(&mut single, &world.bodies, &mut r1);
+                        update_parts_in_two_passes(&mut twice, &world.bodies, &mut r2);
+                        assert!(single == twice, "step {}", world.step_count());
+                        assert_eq!(r1.dropped_contacts, r2.dropped_contacts);
+                        if twice != world.contacts {
+                            changed += 1;
+                            if plan.is_some() {
+                                planned += 1;
+                            } else {
+                                fallback += 1;
+                            }
+                        }
+                        world.step();
+                    }
+                    (changed, planned, fallback)
+                }
+                for scene in [Scene::Terrain, Scene::TerrainMesh] {
+                    let mut world: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
+                    world.set_config(scene.config()).unwrap();
+                    scene
+                        .build_on(&mut world, &hulls, shapes.ground(scene))
+                        .unwrap();
+                    let (changed, planned, fallback) = compare(&mut world, 300);
+                    assert!(
+                        changed > 50,
+                        "{scene:?}: {changed} updates changed anything"
+                    );
+                    assert!(
+                        planned * 10 >= changed * 9,
+                        "{scene:?}: {planned} of {changed}"
+                    );
+                    std::println!(
+                        "{scene:?}: {changed} changed, {planned} planned, {fallback} not"
+                    );
+                }
+                // A buffer the pile fills: some updates do not fit the plan.
+                let mut small: std::boxed::Box<crate::World<'_, 128, 200, 64>> =
+                    std::boxed::Box::default();
+                small.set_config(Scene::Terrain.config()).unwrap();
+                Scene::Terrain
+                    .build_on(&mut small, &hulls, shapes.ground(Scene::Terrain))
+                    .unwrap();
+                let (changed, _, fallback) = compare(&mut small, 300);
+                std::println!("small: {changed} changed, {fallback} not planned");
+                assert!(fallback > 0, "the full buffer never fell back");
+            })
+            .unwrap()
+            .join()
+            .unwrap();
+    }
 
     /// `beyond_reach` against the exact queries: whenever it skips a part pair, the
     /// manifold with that margin has no point, GJK's distance exceeds the margin and the
