@@ -809,31 +809,40 @@ fn compare_narrow(reps: usize) -> Result<Vec<NarrowRow>, Fail> {
                 QuerySet::HullHull => time_per_query(&qs, NARROW_PASSES, |q| {
                     let (a, b) = (&c_hulls[hull(q.hull_a)], &c_hulls[hull(q.hull_b)]);
                     let mut cache = SimplexCache::default();
-                    black_box(collide::distance(a, &q.pose_a, b, &q.pose_b, &mut cache).ok());
+                    black_box(&collide::distance(a, &q.pose_a, b, &q.pose_b, &mut cache));
                 }),
                 QuerySet::BallBox => time_per_query(&qs, NARROW_PASSES, |q| {
-                    black_box(
-                        collide::contact(&c_ball, &q.pose_a, &c_cube, &q.pose_b, CONTACT_MARGIN)
-                            .ok(),
-                    );
+                    black_box(&collide::contact(
+                        &c_ball,
+                        &q.pose_a,
+                        &c_cube,
+                        &q.pose_b,
+                        CONTACT_MARGIN,
+                    ));
                 }),
                 QuerySet::BoxBox => time_per_query(&qs, NARROW_PASSES, |q| {
-                    black_box(
-                        collide::contact(&c_cube, &q.pose_a, &c_cube, &q.pose_b, CONTACT_MARGIN)
-                            .ok(),
-                    );
+                    black_box(&collide::contact(
+                        &c_cube,
+                        &q.pose_a,
+                        &c_cube,
+                        &q.pose_b,
+                        CONTACT_MARGIN,
+                    ));
                 }),
             };
             let mut parry_run = || match set {
                 QuerySet::HullHull => time_per_query(&pqs, NARROW_PASSES, |q| {
                     let (a, b) = (&sets.parry_hulls[q.hull_a], &sets.parry_hulls[q.hull_b]);
-                    black_box(pq::distance(&q.pose_a, a, &q.pose_b, b).ok());
+                    black_box(&pq::distance(&q.pose_a, a, &q.pose_b, b));
                 }),
                 QuerySet::BallBox => time_per_query(&pqs, NARROW_PASSES, |q| {
-                    black_box(
-                        pq::contact(&q.pose_a, &sets.ball, &q.pose_b, &sets.cube, CONTACT_MARGIN)
-                            .ok(),
-                    );
+                    black_box(&pq::contact(
+                        &q.pose_a,
+                        &sets.ball,
+                        &q.pose_b,
+                        &sets.cube,
+                        CONTACT_MARGIN,
+                    ));
                 }),
                 QuerySet::BoxBox => time_per_query(&pqs, NARROW_PASSES, |q| {
                     // A fresh manifold per query (no coherence with the previous, unrelated
