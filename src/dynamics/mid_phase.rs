@@ -235,9 +235,21 @@ pub(crate) fn update_parts<const N: usize, const C: usize>(
     bodies: &Pool<Body<'_>, N>,
     report: &mut StepReport,
 ) {
-    if !contacts.iter().any(Contact::is_record) {
-        return;
+    if contacts.iter().any(Contact::is_record) {
+        update_part_contacts(contacts, bodies, report);
     }
+}
+
+/// [`update_parts`] for a buffer with a pair record. Kept out of line: its plan and list
+/// (about 3 KiB) take stack only in worlds with meshes or compounds, not in every step
+/// of a world of convex shapes (the minimal firmware's peak grew by that much while
+/// they were inlined).
+#[inline(never)]
+fn update_part_contacts<const N: usize, const C: usize>(
+    contacts: &mut HVec<Contact, C>,
+    bodies: &Pool<Body<'_>, N>,
+    report: &mut StepReport,
+) {
     let mut list: HVec<u32, MAX_PAIR_PARTS> = HVec::new();
     match plan_relocation(contacts.as_mut_slice(), C, bodies, &mut list) {
         Some(plan) => {
