@@ -611,8 +611,9 @@ pub(crate) fn prepare<const N: usize>(
     } else {
         plain * (1.0 / count)
     };
-    for p in k.points.iter_mut().take(usize::from(k.len)) {
-        let mid = (center_a + p.core_a + n * rho_a + center_b + p.core_b - n * rho_b) * 0.5;
+    // Each point's twist arm: its distance from the centre, measured at the midpoint
+    // between its two surface points.
+    for (p, mid) in k.points.iter_mut().zip(mids).take(usize::from(k.len)) {
         p.twist_arm = (mid - center).length();
     }
     prepare_patch(

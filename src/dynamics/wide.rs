@@ -794,13 +794,10 @@ fn warm_start_group<const ROWS: usize>(
         a.w.sub_scaled(&p.in_a, lambda);
         b.w.add_scaled(&p.in_b, lambda);
     }
-    let jn = shared.n.scale(pushed);
-    a.v.sub_scaled(&jn, shared.ma);
-    b.v.add_scaled(&jn, shared.mb);
     let (q1, q2, q3) = (&group.s1.s, &group.s2.s, &group.s3.s);
     let l0 = keep(f4(q1, TANGENT_IMPULSE));
     let l1 = keep(f4(q1, TANGENT_IMPULSE + 1));
-    push_tangent(&mut a, &mut b, &shared, q2, [l0, l1]);
+    push_tangent_and_normal(&mut a, &mut b, &shared, q2, [l0, l1], pushed);
     for i in 0..3 {
         let lambda = keep(f4(q2, ANGULAR_IMPULSE + i));
         if lambda.0 != [0.0; 4] {
@@ -846,6 +843,40 @@ impl Shared {
             twist: f4(q0, TWIST),
         }
     }
+}
+
+/// What a group's normal rows summed, per lane: the new impulses (`total`), the same
+/// times each point's twist arm (`levers`), and the impulse they added (`pushed`, not
+/// yet applied to the linear velocities).
+struct Sums {
+    total: F4,
+    levers: F4,
+    pushed: F4,
+}
+
+/// Apply `(λ₁, λ₂)` along the tangents at the friction centres and `λ_n` along the
+/// normal to the linear velocities only (the normal rows moved the angular ones): one
+/// push of `t₁ λ₁ + t₂ λ₂ + n λ_n`.
+#[inline]
+fn push_tangent_and_normal(
+    a: &mut Bodies4,
+    b: &mut Bodies4,
+    sh: &Shared,
+    q2: &[F4; QUARTER],
+    l: [F4; 2],
+    normal: F4,
+) {
+    let j = sh
+        .t1
+        .scale(l[0])
+        .add(&sh.t2.scale(l[1]))
+        .add(&sh.n.scale(normal));
+    a.v.sub_scaled(&j, sh.ma);
+    a.w.sub_scaled(&v4(q2, IT_A0), l[0]);
+    a.w.sub_scaled(&v4(q2, IT_A1), l[1]);
+    b.v.add_scaled(&j, sh.mb);
+    b.w.add_scaled(&v4(q2, IT_B0), l[0]);
+    b.w.add_scaled(&v4(q2, IT_B1), l[1]);
 }
 
 /// Apply `(λ₁, λ₂)` along the tangents at the friction centres.
@@ -1109,14 +1140,19 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
             p.total_impulse = p.total_impulse.select_where(mask, p.total_impulse + delta);
         }
     }
-    let jn = n.scale(pushed);
-    a.v.sub_scaled(&jn, sh.ma);
-    b.v.add_scaled(&jn, sh.mb);
     if RUB {
-        solve_patch(
-            group, &sh, &mut a, &mut b, cfg, total, levers, pass.last, ROWS, rubs,
-        );
+        // The rows' linear push goes with the friction's (see `solve_patch`).
+        let sums = Sums {
+            total,
+            levers,
+            pushed,
+        };
+        solve_patch(group, &sh, &mut a, &mut b, cfg, sums, pass.last, ROWS, rubs);
         solve_rolling(group, &sh, &mut a, &mut b, total, rubs);
+    } else {
+        let jn = n.scale(pushed);
+        a.v.sub_scaled(&jn, sh.ma);
+        b.v.add_scaled(&jn, sh.mb);
     }
     a.scatter(bodies, &ia, mask);
     b.scatter(bodies, &ib, mask);
@@ -1187,8 +1223,11 @@ fn solve_patch(
     a: &mut Bodies4,
     b: &mut Bodies4,
     cfg: &WorldConfig,
-    total: F4,
-    levers: F4,
+    Sums {
+        total,
+        levers,
+        pushed,
+    }: Sums,
     last: bool,
     rows: usize,
     mask: [bool; 4],
@@ -1215,7 +1254,11 @@ fn solve_patch(
         old[0].select_where(mask, clipped_new[0]),
         old[1].select_where(mask, clipped_new[1]),
     ];
-    push_tangent(a, b, sh, q2, [new[0] - old[0], new[1] - old[1]]);
+    // The tangent speeds above are those before the normal rows' linear push: it is
+    // along `n`, orthogonal to both tangents, so it does not change them. It is applied
+    // here, with the friction's, in one push of the linear velocities.
+    let dl = [new[0] - old[0], new[1] - old[1]];
+    push_tangent_and_normal(a, b, sh, q2, dl, pushed);
     let mut flags_out = flags;
     if last {
         let after = tangent_speeds(a, b, sh, q1);

@@ -338,7 +338,6 @@ fn prepare_rows(
     let mut carried = zero;
     let mut largest = zero;
     let mut mids = [V4::default(); 4];
-    let mut cores = [(V4::default(), V4::default()); 4];
     let mut impulses = [zero; 4];
     // The point rows some lane has (a group of spheres has one).
     let rows = usize::from(x.len.iter().copied().max().unwrap_or(0)).min(4);
@@ -373,11 +372,8 @@ fn prepare_rows(
         plain = select_v(here, &plain.add(&mid), &plain);
         carried = carried.select_where(here, carried + impulse);
         largest = largest.select_where(here, largest.max(impulse));
-        if let (Some(m), Some(c), Some(i)) =
-            (mids.get_mut(j), cores.get_mut(j), impulses.get_mut(j))
-        {
+        if let (Some(m), Some(i)) = (mids.get_mut(j), impulses.get_mut(j)) {
             *m = mid;
-            *c = (core_a, core_b);
             *i = impulse;
         }
         // Points past a lane's count are empty: zero in every field.
@@ -446,17 +442,9 @@ fn prepare_rows(
     );
     let mut arms = [zero; 4];
     for j in 0..rows {
-        let (Some(&here), Some((core_a, core_b))) = (x.point.get(j), cores.get(j)) else {
+        let (Some(&here), Some(mid)) = (x.point.get(j), mids.get(j)) else {
             break;
         };
-        let mid = x
-            .center_a
-            .add(core_a)
-            .add(&n_rho_a)
-            .add(&x.center_b)
-            .add(core_b)
-            .sub(&n_rho_b)
-            .scale(F4::splat(0.5));
         let d = mid.sub(&center);
         let arm = keep(here, d.dot(&d).sqrt());
         if let Some(a) = arms.get_mut(j) {
