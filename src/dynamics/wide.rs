@@ -876,22 +876,31 @@ fn push_tangent_and_normal(
         .scale(l[0])
         .add(&sh.t2.scale(l[1]))
         .add(&sh.n.scale(normal));
-    a.v.sub_scaled(&j, sh.ma);
-    a.w.sub_scaled(&v4(q2, IT_A0), l[0]);
-    a.w.sub_scaled(&v4(q2, IT_A1), l[1]);
-    b.v.add_scaled(&j, sh.mb);
-    b.w.add_scaled(&v4(q2, IT_B0), l[0]);
-    b.w.add_scaled(&v4(q2, IT_B1), l[1]);
+    push_at_patch(a, b, sh, q2, &j, l);
 }
 
 /// Apply `(λ₁, λ₂)` along the tangents at the friction centres.
 #[inline]
 fn push_tangent(a: &mut Bodies4, b: &mut Bodies4, sh: &Shared, q2: &[F4; QUARTER], l: [F4; 2]) {
     let j = sh.t1.scale(l[0]).add(&sh.t2.scale(l[1]));
-    a.v.sub_scaled(&j, sh.ma);
+    push_at_patch(a, b, sh, q2, &j, l);
+}
+
+/// Apply the linear impulse `j` to both bodies' velocities and `(λ₁, λ₂)` along the
+/// tangents to their angular velocities.
+#[inline(always)]
+fn push_at_patch(
+    a: &mut Bodies4,
+    b: &mut Bodies4,
+    sh: &Shared,
+    q2: &[F4; QUARTER],
+    j: &V4,
+    l: [F4; 2],
+) {
+    a.v.sub_scaled(j, sh.ma);
     a.w.sub_scaled(&v4(q2, IT_A0), l[0]);
     a.w.sub_scaled(&v4(q2, IT_A1), l[1]);
-    b.v.add_scaled(&j, sh.mb);
+    b.v.add_scaled(j, sh.mb);
     b.w.add_scaled(&v4(q2, IT_B0), l[0]);
     b.w.add_scaled(&v4(q2, IT_B1), l[1]);
 }
