@@ -956,9 +956,8 @@ mod tests {
     /// field and a mesh under 40 mixed bodies) and the same scene packed into a contact
     /// buffer too small for it: in every step, after its enlarged boxes are refreshed,
     /// both run on copies of the world's contacts and give the same contacts, bit for
-    /// bit, and the same drop count. The
-    /// plan must carry most updates that change anything, and the small buffer must send
-    /// some to the two passes.
+    /// bit, and the same drop count. The plan must carry most updates that change
+    /// anything, and the small buffer must send some to the two passes.
     #[test]
     fn the_single_move_update_is_the_two_pass_update() {
         use crate::scenes::{self, ReferenceWorld, Scene, TerrainData};
