@@ -17,11 +17,11 @@ use crate::shape::{
 /// Departure from Ericson: for segments that meet at a small angle θ his parameters carry
 /// about `ε / sin²θ` of rounding (at θ = 1e-4 rad in f32, more than the whole range), so
 /// his clamped answer can be the far end of two nearly parallel segments; the true closest
-/// pair is then one of the end pairs. Below [`WELL_CONDITIONED_SIN2`] his answer is
-/// compared with the four end-to-segment pairs (each a well-conditioned projection) and
-/// the closest of the five is returned (his on ties). Above it his answer stands alone:
-/// exact in exact arithmetic, its rounding is then below `100 ε` of the segments'
-/// lengths and distance, and an end pair could beat it by rounding only.
+/// pair is then one of the end pairs. Within about 5.7° of parallel (`sin²θ ≤ 0.01`)
+/// his answer is compared with the four end-to-segment pairs (each a well-conditioned
+/// projection) and the closest of the five is returned (his on ties). Beyond that his
+/// answer stands alone: exact in exact arithmetic, its rounding is then below `100 ε` of
+/// the segments' lengths and distance, and an end pair could beat it by rounding only.
 pub fn segment_closest_points(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> (f32, f32) {
     let (best, well_conditioned) = ericson_closest_points(p1, q1, p2, q2);
     if well_conditioned {
