@@ -771,6 +771,7 @@ fn deepest_four(normal: Vec3, candidates: &[Candidate]) -> Option<LocalManifold>
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::vec64::Vec64;
     use crate::rng::SplitMix64;
 
     /// The box feature by cases: vertex, edge or face from the clamped coordinates.
@@ -823,22 +824,17 @@ mod tests {
     /// f64: the gap squared is convex in `s` once `t` is the clamped projection, so a
     /// ternary search on `s` (200 rounds) finds its minimum.
     fn closest_gap_oracle(p1: Vec3, q1: Vec3, p2: Vec3, q2: Vec3) -> f64 {
-        let w = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
-        let (p1, q1, p2, q2) = (w(p1), w(q1), w(p2), w(q2));
-        let d1: [f64; 3] = core::array::from_fn(|k| q1[k] - p1[k]);
-        let d2: [f64; 3] = core::array::from_fn(|k| q2[k] - p2[k]);
-        let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let (p1, p2) = (Vec64::of(p1), Vec64::of(p2));
+        let (d1, d2) = (Vec64::of(q1) - p1, Vec64::of(q2) - p2);
+        let e = d2.length_squared();
         let gap2 = |s: f64| {
-            let x: [f64; 3] = core::array::from_fn(|k| p1[k] + d1[k] * s);
-            let e = dot(d2, d2);
-            let r: [f64; 3] = core::array::from_fn(|k| x[k] - p2[k]);
+            let x = p1 + d1 * s;
             let t = if e > 0.0 {
-                (dot(r, d2) / e).clamp(0.0, 1.0)
+                ((x - p2).dot(d2) / e).clamp(0.0, 1.0)
             } else {
                 0.0
             };
-            let g: [f64; 3] = core::array::from_fn(|k| p2[k] + d2[k] * t - x[k]);
-            dot(g, g)
+            (p2 + d2 * t - x).length_squared()
         };
         let (mut lo, mut hi) = (0.0f64, 1.0f64);
         for _ in 0..200 {
