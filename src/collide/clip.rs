@@ -2,7 +2,7 @@
 //! reference face) and reduction of the clipped points to at most 4.
 //!
 //! Everything here works in one frame (the caller's, A's frame in the narrow phase) and on
-//! [`Face`]s already moved into it.
+//! [`Face`](crate::shape::Face)s already moved into it.
 //!
 //! Feature ids follow each clipped point (Box2D `b2ClipPolygons`, Gregorius, "Robust
 //! Contact Creation for Physics Simulations", GDC 2015): an incident vertex that survives
@@ -13,7 +13,7 @@
 
 use super::manifold::Candidate;
 use crate::math::{scalar, Vec3};
-use crate::shape::{Face, FeatureId, MAX_FACE_VERTICES};
+use crate::shape::{FeatureId, Polygon, MAX_FACE_VERTICES};
 
 /// Most points a clipped polygon can have: each of the at most `MAX_FACE_VERTICES` side
 /// planes adds at most one vertex to an incident polygon of at most `MAX_FACE_VERTICES`.
@@ -76,7 +76,7 @@ impl ClipPolygon {
 /// `k + 1`): `(v₁ − v₀) × n`, outward for a polygon counter-clockwise about `n`. Not
 /// normalised: only its sign is used, and `d = s · (p − v₀)` scales with it.
 #[inline]
-fn side_plane(reference: &Face, k: usize) -> (Vec3, Vec3) {
+fn side_plane(reference: &impl Polygon, k: usize) -> (Vec3, Vec3) {
     let verts = reference.points();
     let n = verts.len();
     let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
@@ -86,15 +86,19 @@ fn side_plane(reference: &Face, k: usize) -> (Vec3, Vec3) {
         verts.first()
     };
     let v1 = next.copied().unwrap_or(v0);
-    ((v1 - v0).cross(reference.normal), v0)
+    ((v1 - v0).cross(reference.normal()), v0)
 }
 
 /// The reference feature of a point made on side plane `k` from a segment that lay on
 /// `seg_ref_edge`: edge `k` when the segment was inside the face, else the corner shared
 /// by the two side edges (edge `j` ends where edge `j + 1` starts).
-fn reference_feature(reference: &Face, seg_ref_edge: u8, k: usize) -> FeatureId {
-    let n = reference.len as usize;
-    let edge_k = reference.edge_ids.get(k).copied().unwrap_or(reference.id);
+fn reference_feature(reference: &impl Polygon, seg_ref_edge: u8, k: usize) -> FeatureId {
+    let n = reference.points().len();
+    let edge_k = reference
+        .edge_ids()
+        .get(k)
+        .copied()
+        .unwrap_or(reference.id());
     if seg_ref_edge == NO_EDGE || n == 0 {
         return edge_k;
     }
@@ -102,9 +106,9 @@ fn reference_feature(reference: &Face, seg_ref_edge: u8, k: usize) -> FeatureId 
     // (i + 1) mod n for i < n, without a division.
     let succ = |i: usize| if i + 1 >= n { 0 } else { i + 1 };
     let corner = if succ(j) == k {
-        reference.vertex_ids.get(k)
+        reference.vertex_ids().get(k)
     } else if succ(k) == j {
-        reference.vertex_ids.get(j)
+        reference.vertex_ids().get(j)
     } else {
         None
     };
@@ -127,7 +131,7 @@ fn crossing(p: Vec3, q: Vec3, dp: f32, dq: f32) -> Vec3 {
 fn clip_by_side_plane(
     input: &ClipPolygon,
     out: &mut ClipPolygon,
-    reference: &Face,
+    reference: &impl Polygon,
     k: usize,
     incident_face: FeatureId,
     closed: bool,
@@ -136,11 +140,13 @@ fn clip_by_side_plane(
     out.vertices.clear();
     let verts = input.vertices();
     let n = verts.len();
-    // Every vertex's signed distance, once.
-    let mut d = [0.0f32; MAX_CLIP_POINTS];
-    for (di, v) in d.iter_mut().zip(verts) {
-        *di = s.dot(v.point - v0);
-    }
+    let Some(first) = verts.first() else {
+        return;
+    };
+    // Signed distances, each vertex's once: the first kept for the closing segment, the
+    // next one's carried to the next iteration.
+    let d_first = s.dot(first.point - v0);
+    let mut dp = d_first;
     // Segments i → i + 1; the closing one only for a polygon.
     let segments = if closed && n > 2 {
         n
@@ -148,36 +154,37 @@ fn clip_by_side_plane(
         n.saturating_sub(1)
     };
     for (i, p) in verts.iter().enumerate() {
-        let dp = d.get(i).copied().unwrap_or(0.0);
+        let j = if i + 1 < n { i + 1 } else { 0 };
+        let next = verts.get(j);
+        let dq = match next {
+            Some(q) if j != 0 => s.dot(q.point - v0),
+            _ => d_first,
+        };
         if dp <= 0.0 {
             out.push(*p);
         }
-        if i >= segments {
-            continue;
-        }
-        let j = if i + 1 < n { i + 1 } else { 0 };
-        let dq = d.get(j).copied().unwrap_or(0.0);
         let exits = dp < 0.0 && dq > 0.0;
         let enters = dp > 0.0 && dq < 0.0;
-        if !(exits || enters) {
-            continue;
+        if i < segments && (exits || enters) {
+            if let Some(q) = next {
+                let ref_id = reference_feature(reference, p.seg_ref_edge, k);
+                let (seg_ref_edge, seg_inc) = if exits {
+                    // From here the clipped boundary runs along side plane k, inside the
+                    // incident polygon, until it re-enters.
+                    (k as u8, incident_face)
+                } else {
+                    (p.seg_ref_edge, p.seg_inc)
+                };
+                out.push(ClipVertex {
+                    point: crossing(p.point, q.point, dp, dq),
+                    ref_id,
+                    inc_id: p.seg_inc,
+                    seg_ref_edge,
+                    seg_inc,
+                });
+            }
         }
-        let Some(q) = verts.get(j) else { continue };
-        let ref_id = reference_feature(reference, p.seg_ref_edge, k);
-        let (seg_ref_edge, seg_inc) = if exits {
-            // From here the clipped boundary runs along side plane k, inside the
-            // incident polygon, until it re-enters.
-            (k as u8, incident_face)
-        } else {
-            (p.seg_ref_edge, p.seg_inc)
-        };
-        out.push(ClipVertex {
-            point: crossing(p.point, q.point, dp, dq),
-            ref_id,
-            inc_id: p.seg_inc,
-            seg_ref_edge,
-            seg_inc,
-        });
+        dp = dq;
     }
 }
 
@@ -202,26 +209,31 @@ impl ClipBuffers {
     /// the same frame). The result lies on the incident polygon, inside the reference
     /// face's prism; points are not yet filtered by depth. A 1-vertex incident face gives
     /// that vertex when it is inside; a 2-vertex one is clipped as a segment.
-    pub(crate) fn polygon(&mut self, reference: &Face, incident: &Face) -> &ClipPolygon {
+    pub(crate) fn polygon(
+        &mut self,
+        reference: &impl Polygon,
+        incident: &impl Polygon,
+    ) -> &ClipPolygon {
         self.front.vertices.clear();
-        let m = (incident.len as usize).min(MAX_FACE_VERTICES);
-        for k in 0..m {
+        let points = incident.points();
+        let (vertex_ids, edge_ids) = (incident.vertex_ids(), incident.edge_ids());
+        for (k, &point) in points.iter().enumerate() {
             self.front.push(ClipVertex {
-                point: incident.vertices.get(k).copied().unwrap_or(Vec3::ZERO),
-                ref_id: reference.id,
-                inc_id: incident.vertex_ids.get(k).copied().unwrap_or(incident.id),
+                point,
+                ref_id: reference.id(),
+                inc_id: vertex_ids.get(k).copied().unwrap_or(incident.id()),
                 seg_ref_edge: NO_EDGE,
-                seg_inc: incident.edge_ids.get(k).copied().unwrap_or(incident.id),
+                seg_inc: edge_ids.get(k).copied().unwrap_or(incident.id()),
             });
         }
-        self.run(reference, incident.id, m > 2)
+        self.run(reference, incident.id(), points.len() > 2)
     }
 
     /// Clip the segment `p0 → p1` (ids `vertex_ids`, edge id `edge_id`) against the side
     /// planes of the reference face: at most 2 points.
     pub(crate) fn segment(
         &mut self,
-        reference: &Face,
+        reference: &impl Polygon,
         p0: Vec3,
         p1: Vec3,
         vertex_ids: [FeatureId; 2],
@@ -231,7 +243,7 @@ impl ClipBuffers {
         for (p, id) in [(p0, vertex_ids[0]), (p1, vertex_ids[1])] {
             self.front.push(ClipVertex {
                 point: p,
-                ref_id: reference.id,
+                ref_id: reference.id(),
                 inc_id: id,
                 seg_ref_edge: NO_EDGE,
                 seg_inc: edge_id,
@@ -243,7 +255,12 @@ impl ClipBuffers {
     /// Run every side plane of `reference` over the front buffer in edge order, back and
     /// forth between the two buffers; then drop the points that lie outside the reference
     /// face's box (see [`FaceBox`]).
-    fn run(&mut self, reference: &Face, incident_face: FeatureId, closed: bool) -> &ClipPolygon {
+    fn run(
+        &mut self,
+        reference: &impl Polygon,
+        incident_face: FeatureId,
+        closed: bool,
+    ) -> &ClipPolygon {
         let out = self.side_planes(reference, incident_face, closed);
         if let Some(face_box) = FaceBox::of(reference) {
             out.vertices.retain(|v| face_box.holds(v.point));
@@ -255,11 +272,11 @@ impl ClipBuffers {
     /// forth between the two buffers.
     fn side_planes(
         &mut self,
-        reference: &Face,
+        reference: &impl Polygon,
         incident_face: FeatureId,
         closed: bool,
     ) -> &mut ClipPolygon {
-        let planes = (reference.len as usize).min(MAX_FACE_VERTICES);
+        let planes = reference.points().len();
         if planes < 3 {
             return &mut self.front;
         }
@@ -321,7 +338,7 @@ struct FaceBox {
 
 impl FaceBox {
     /// The box of `reference`; `None` for a face without vertices (every point kept).
-    fn of(reference: &Face) -> Option<FaceBox> {
+    fn of(reference: &impl Polygon) -> Option<FaceBox> {
         let verts = reference.points();
         let &v0 = verts.first()?;
         let (mut lo, mut hi) = (v0, v0);
@@ -334,7 +351,7 @@ impl FaceBox {
         let slack = Vec3::splat(FACE_BOX_SLACK * size);
         Some(FaceBox {
             v0,
-            normal: reference.normal,
+            normal: reference.normal(),
             lo: lo - slack,
             hi: hi + slack,
         })
@@ -366,7 +383,7 @@ fn next_index(k: usize, n: usize) -> usize {
 /// nearest boundary edge, or a vertex when the nearest boundary point is within the
 /// tolerance of one. The tolerance is [`FEATURE_TOLERANCE`] times the longest edge, so a
 /// point resting exactly on an edge or corner is named by it despite rounding.
-pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
+pub(crate) fn closest_feature(face: &impl Polygon, p: Vec3) -> FeatureId {
     let verts = face.points();
     let n = verts.len();
     let mut longest = 0.0;
@@ -377,10 +394,10 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
     }
     let tolerance = FEATURE_TOLERANCE * longest;
     if n == 0 {
-        return face.id;
+        return face.id();
     }
     if n == 1 {
-        return face.vertex_ids[0];
+        return face.vertex_ids().first().copied().unwrap_or(face.id());
     }
     if n >= 3 {
         let mut inside = true;
@@ -394,12 +411,12 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
             }
         }
         if inside {
-            return face.id;
+            return face.id();
         }
     }
     // Nearest point on the boundary; a segment (n == 2) has one edge.
     let edges = if n == 2 { 1 } else { n };
-    let mut best = face.id;
+    let mut best = face.id();
     let mut best_d2 = f32::INFINITY;
     for k in 0..edges {
         let v0 = verts.get(k).copied().unwrap_or(Vec3::ZERO);
@@ -417,14 +434,14 @@ pub(crate) fn closest_feature(face: &Face, p: Vec3) -> FeatureId {
             let along = t * scalar::sqrt(e2);
             let back = (1.0 - t) * scalar::sqrt(e2);
             best = if along <= tolerance {
-                face.vertex_ids.get(k).copied().unwrap_or(face.id)
+                face.vertex_ids().get(k).copied().unwrap_or(face.id())
             } else if back <= tolerance {
-                face.vertex_ids
+                face.vertex_ids()
                     .get(next_index(k, n))
                     .copied()
-                    .unwrap_or(face.id)
+                    .unwrap_or(face.id())
             } else {
-                face.edge_ids.get(k).copied().unwrap_or(face.id)
+                face.edge_ids().get(k).copied().unwrap_or(face.id())
             };
         }
     }
@@ -519,13 +536,13 @@ pub(crate) fn reduce_to_four(points: &[Candidate], normal: Vec3) -> ([usize; 4],
 mod tests {
     use super::*;
     use crate::collide::manifold::ContactId;
-    use crate::shape::Cuboid;
+    use crate::shape::{Cuboid, Face};
     use std::vec::Vec;
 
     /// The +Y face of a box of half-extents `h`, moved by `offset`, turned over when `flip`.
-    fn top_face(h: Vec3, offset: Vec3, flip: bool) -> Face {
+    fn top_face(h: Vec3, offset: Vec3, flip: bool) -> Face<4> {
         let c = Cuboid::new(h).unwrap();
-        let f = c.face(1, !flip);
+        let f = c.quad(1, !flip);
         let mut f = f.transformed(&crate::math::Iso::from_position(offset));
         if flip {
             // The −Y face of a box above: same plane orientation as an incident face.

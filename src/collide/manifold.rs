@@ -35,7 +35,7 @@ use super::sat::{self, PairCache, SatOutcome, TrianglePolytope, SAT_TOLERANCE};
 use super::Proxy;
 use crate::error::{non_negative, Error, Input};
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::{Capsule, Face, FeatureId, Shape, Sphere};
+use crate::shape::{Capsule, Face, FeatureId, Polygon, Shape, Sphere};
 use core::cmp::Ordering;
 
 /// Most points in a manifold.
@@ -1058,19 +1058,17 @@ fn face_contact(
 /// incident features of each point. Written to `out`; false when the reference face is
 /// not a polygon or nothing is within the margin.
 pub(crate) fn clipped_face_manifold(
-    reference: &Face,
-    incident: &Face,
+    reference: &impl Polygon,
+    incident: &impl Polygon,
     reference_is_a: bool,
     margin: f32,
     out: &mut LocalManifold,
 ) -> bool {
-    if reference.len < 3 {
+    let (&[r0, _, _, ..], nr) = (reference.points(), reference.normal()) else {
         return false;
-    }
+    };
     let mut buffers = clip::ClipBuffers::new();
     let clipped = buffers.polygon(reference, incident);
-    let nr = reference.normal;
-    let r0 = reference.vertices[0];
     let normal = if reference_is_a { nr } else { -nr };
     let mut candidates: heapless::Vec<Candidate, MAX_CLIP_POINTS> = heapless::Vec::new();
     for v in clipped.vertices() {

@@ -106,7 +106,7 @@ use super::manifold::{clipped_face_manifold, Candidate, ContactId, LocalManifold
 use crate::math::{scalar, Iso, Mat3, Vec3};
 use crate::shape::EDGE_TILT_SIN;
 use crate::shape::{
-    Capsule, ConvexHull, Cuboid, Face, FeatureId, Triangle, MAX_HULL_EDGES, MAX_HULL_FACES,
+    Capsule, ConvexHull, Cuboid, Face, FeatureId, Polygon, Triangle, MAX_HULL_EDGES, MAX_HULL_FACES,
 };
 
 /// Relative tolerance of the separating axis test's axis choice (box and hull pairs in
@@ -289,10 +289,12 @@ pub(crate) trait Polytope {
     fn edge(&self, e: usize) -> Option<PolyEdge>;
     /// The faces of edge `e` (along `p0 → p1`, along `p1 → p0`), `None` past the last.
     fn edge_faces(&self, e: usize) -> Option<(usize, usize)>;
+    /// Its faces as polygons: `Face<4>` for a box, a full [`Face`] for the rest.
+    type FacePolygon: Polygon;
     /// Face `f` as a polygon with feature ids.
-    fn polygon(&self, f: usize) -> Face;
+    fn polygon(&self, f: usize) -> Self::FacePolygon;
     /// The face whose normal is most aligned with `dir`.
-    fn face_along(&self, dir: Vec3) -> Face;
+    fn face_along(&self, dir: Vec3) -> Self::FacePolygon;
     /// A point well inside.
     fn center(&self) -> Vec3;
     /// The largest core coordinate (m): the size that rounding scales with.
@@ -455,12 +457,14 @@ impl Polytope for Cuboid {
         Some(if pu == pw { (fu, fw) } else { (fw, fu) })
     }
 
-    fn polygon(&self, f: usize) -> Face {
-        self.face((f / 2).min(2), f % 2 == 1)
+    type FacePolygon = Face<4>;
+
+    fn polygon(&self, f: usize) -> Face<4> {
+        self.quad((f / 2).min(2), f % 2 == 1)
     }
 
-    fn face_along(&self, dir: Vec3) -> Face {
-        self.supporting_face(dir)
+    fn face_along(&self, dir: Vec3) -> Face<4> {
+        self.supporting_quad(dir)
     }
 
     fn center(&self) -> Vec3 {
@@ -532,6 +536,8 @@ impl Polytope for ConvexHull {
         let h = ConvexHull::edge(self, e)?;
         Some((h.face0 as usize, h.face1 as usize))
     }
+
+    type FacePolygon = Face;
 
     fn polygon(&self, f: usize) -> Face {
         self.face(f)
@@ -676,18 +682,20 @@ impl Polytope for TrianglePolytope {
         Some(if e & 1 == 0 { (0, side) } else { (side, 1) })
     }
 
-    fn polygon(&self, f: usize) -> Face {
+    type FacePolygon = Face<3>;
+
+    fn polygon(&self, f: usize) -> Face<3> {
         match f {
-            0 => self.triangle().supporting_face(self.normal),
-            1 => self.triangle().supporting_face(-self.normal),
+            0 => self.triangle().supporting_tri(self.normal),
+            1 => self.triangle().supporting_tri(-self.normal),
             // A side face has no area: no polygon (the caller falls back).
             _ => Face::new(self.sides[(f.max(2) - 2).min(2)], FeatureId::face(f as u32)),
         }
     }
 
-    fn face_along(&self, dir: Vec3) -> Face {
+    fn face_along(&self, dir: Vec3) -> Face<3> {
         // The triangle itself, front or back: never a side, which has no area.
-        self.triangle().supporting_face(dir)
+        self.triangle().supporting_tri(dir)
     }
 
     fn center(&self) -> Vec3 {
@@ -1402,7 +1410,7 @@ fn build<A: Polytope, B: Polytope>(
     match choice {
         Choice::FaceA(f) => {
             let reference = a.polygon(f.index);
-            let mut incident = b.face_along(fr.inv_vector(-reference.normal));
+            let mut incident = b.face_along(fr.inv_vector(-reference.normal()));
             incident.transform_by(&fr.r, fr.t);
             guarded(
                 &reference,
@@ -1418,7 +1426,7 @@ fn build<A: Polytope, B: Polytope>(
         Choice::FaceB(f) => {
             let mut reference = b.polygon(f.index);
             reference.transform_by(&fr.r, fr.t);
-            let incident = a.face_along(-reference.normal);
+            let incident = a.face_along(-reference.normal());
             guarded(
                 &reference,
                 &incident,
@@ -1449,8 +1457,8 @@ fn build<A: Polytope, B: Polytope>(
 /// the minimal penetration, and at most the preference deeper.
 #[allow(clippy::too_many_arguments)]
 fn guarded(
-    reference: &Face,
-    incident: &Face,
+    reference: &impl Polygon,
+    incident: &impl Polygon,
     reference_is_a: bool,
     separation: f32,
     exact: f32,
@@ -1950,7 +1958,7 @@ pub(crate) fn capsule_cuboid(
             }
         }
         _ => {
-            let f = b.face(face.index / 2, face.index % 2 == 1);
+            let f = b.quad(face.index / 2, face.index % 2 == 1);
             let mut buffers = clip::ClipBuffers::new();
             let clipped = buffers.segment(
                 &f,
@@ -2131,15 +2139,15 @@ pub(crate) fn capsule_triangle(
 /// is `r cos α` above its axis, not `r`).
 fn capsule_on_face(
     clipped: &clip::ClipPolygon,
-    f: &Face,
+    f: &impl Polygon,
     d: Vec3,
     r: f32,
     b_in_a: &Iso,
     margin: f32,
     out: &mut LocalManifold,
 ) {
-    let nf = f.normal;
-    let f0 = f.vertices[0];
+    let nf = f.normal();
+    let f0 = f.points().first().copied().unwrap_or(Vec3::ZERO);
     let normal = b_in_a.transform_vector(-nf);
     let dd = d.length_squared();
     let along = nf.dot(d);
@@ -2398,6 +2406,101 @@ mod tests {
                 assert!(along > 0.0, "{edge:?}");
             }
         }
+    }
+
+    /// A box's faces clipped as `Face<4>` give the manifold the full-capacity `Face` gives,
+    /// bit for bit (the clipper is one generic code; only the storage differs), for every
+    /// face of A as the reference against B's face along it, and for B's faces against A's.
+    #[test]
+    fn box_faces_clip_as_four_corners_exactly_as_full_faces() {
+        let mut rng = SplitMix64::new(16);
+        let a = Cuboid::new(Vec3::new(0.5, 0.3, 0.8)).unwrap();
+        let b = Cuboid::new(Vec3::new(0.4, 0.6, 0.2)).unwrap();
+        let mut with_points = 0;
+        for _ in 0..400 {
+            let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.2), rng.rotation());
+            let fr = Frame::new(&b_in_a);
+            for f in 0..6 {
+                for reference_is_a in [true, false] {
+                    let (reference, incident) = if reference_is_a {
+                        let reference = a.polygon(f);
+                        let mut incident = b.face_along(fr.inv_vector(-reference.normal));
+                        incident.transform_by(&fr.r, fr.t);
+                        (reference, incident)
+                    } else {
+                        let mut reference = b.polygon(f);
+                        reference.transform_by(&fr.r, fr.t);
+                        (reference, a.face_along(-reference.normal))
+                    };
+                    let (wide_ref, wide_inc): (Face, Face) =
+                        (reference.with_capacity(), incident.with_capacity());
+                    let margin = 0.1;
+                    let mut quad = LocalManifold::new(Vec3::Y);
+                    let mut wide = LocalManifold::new(Vec3::Y);
+                    let found_quad = clipped_face_manifold(
+                        &reference,
+                        &incident,
+                        reference_is_a,
+                        margin,
+                        &mut quad,
+                    );
+                    let found_wide = clipped_face_manifold(
+                        &wide_ref,
+                        &wide_inc,
+                        reference_is_a,
+                        margin,
+                        &mut wide,
+                    );
+                    assert_eq!(found_quad, found_wide);
+                    // Debug prints every float (and the sign of a zero) exactly.
+                    assert_eq!(std::format!("{quad:?}"), std::format!("{wide:?}"));
+                    with_points += usize::from(found_quad);
+                }
+            }
+        }
+        assert!(with_points > 300, "{with_points}");
+    }
+
+    /// The same for a triangle's faces (`Face<3>`) against a box's, either as the reference.
+    #[test]
+    fn triangle_faces_clip_as_three_corners_exactly_as_full_faces() {
+        let mut rng = SplitMix64::new(17);
+        let b = Cuboid::new(Vec3::new(0.4, 0.6, 0.2)).unwrap();
+        let mut with_points = 0;
+        for _ in 0..400 {
+            let corner = |rng: &mut SplitMix64| rng.unit_vector() * rng.range(0.3, 1.5);
+            let t = Triangle {
+                vertices: [corner(&mut rng), corner(&mut rng), corner(&mut rng)],
+            };
+            let a = TrianglePolytope::new(&t);
+            let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.0), rng.rotation());
+            let fr = Frame::new(&b_in_a);
+            for f in 0..2 {
+                let reference = a.polygon(f);
+                let mut incident = b.face_along(fr.inv_vector(-reference.normal));
+                incident.transform_by(&fr.r, fr.t);
+                let (wide_ref, wide_inc): (Face, Face) =
+                    (reference.with_capacity(), incident.with_capacity());
+                for (reference_is_a, margin) in [(true, 0.1), (false, 0.3)] {
+                    let (mut small, mut wide) =
+                        (LocalManifold::new(Vec3::Y), LocalManifold::new(Vec3::Y));
+                    let found_small = if reference_is_a {
+                        clipped_face_manifold(&reference, &incident, true, margin, &mut small)
+                    } else {
+                        clipped_face_manifold(&incident, &reference, false, margin, &mut small)
+                    };
+                    let found_wide = if reference_is_a {
+                        clipped_face_manifold(&wide_ref, &wide_inc, true, margin, &mut wide)
+                    } else {
+                        clipped_face_manifold(&wide_inc, &wide_ref, false, margin, &mut wide)
+                    };
+                    assert_eq!(found_small, found_wide);
+                    assert_eq!(std::format!("{small:?}"), std::format!("{wide:?}"));
+                    with_points += usize::from(found_small);
+                }
+            }
+        }
+        assert!(with_points > 200, "{with_points}");
     }
 
     /// The closed-form box test and the generic polytope test find the same separations.

@@ -39,6 +39,34 @@ const fn face_corners() -> [[u8; 4]; 6] {
     out
 }
 
+/// The vertex ids of each face's corners, in [`FACE_CORNERS`] order.
+const FACE_VERTEX_IDS: [[FeatureId; 4]; 6] = face_ids(false);
+
+/// The ids of each face's edges, from corner `k` to corner `k + 1` (wrapping).
+const FACE_EDGE_IDS: [[FeatureId; 4]; 6] = face_ids(true);
+
+const fn face_ids(edges: bool) -> [[FeatureId; 4]; 6] {
+    let mut out = [[FeatureId(0); 4]; 6];
+    let mut f = 0;
+    while f < 6 {
+        let mut k = 0;
+        while k < 4 {
+            let (id, next) = (
+                FACE_CORNERS[f][k] as u32,
+                FACE_CORNERS[f][(k + 1) % 4] as u32,
+            );
+            out[f][k] = if edges {
+                FeatureId::edge(id, next)
+            } else {
+                FeatureId::vertex(id)
+            };
+            k += 1;
+        }
+        f += 1;
+    }
+    out
+}
+
 /// A box with half-extents along local X, Y and Z.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
@@ -92,6 +120,11 @@ impl Cuboid {
 
     /// The face whose normal is most aligned with `dir` (ties: X before Y before Z).
     pub(crate) fn supporting_face(&self, dir: Vec3) -> Face {
+        self.supporting_quad(dir).with_capacity()
+    }
+
+    /// [`Cuboid::supporting_face`] as a four-corner face.
+    pub(crate) fn supporting_quad(&self, dir: Vec3) -> Face<4> {
         let a = dir.abs();
         let axis = if a.x >= a.y && a.x >= a.z {
             0
@@ -101,28 +134,26 @@ impl Cuboid {
             2
         };
         let positive = dir[axis] >= 0.0;
-        self.face(axis, positive)
+        self.quad(axis, positive)
     }
 
     /// Face on `axis` (0, 1, 2) on the positive or negative side, counter-clockwise about
     /// its outward normal; corners from [`FACE_CORNERS`].
-    pub(crate) fn face(&self, axis: usize, positive: bool) -> Face {
+    pub(crate) fn quad(&self, axis: usize, positive: bool) -> Face<4> {
         let axis = axis.min(2);
         let s = if positive { 1.0 } else { -1.0 };
         let mut normal = Vec3::ZERO;
         set(&mut normal, axis, s);
-        let face_index = 2 * axis + positive as usize;
-        let mut f = Face::new(normal, FeatureId::face(face_index as u32));
-        let corners = FACE_CORNERS.get(face_index).copied().unwrap_or([0; 4]);
-        for (k, &id) in corners.iter().enumerate() {
-            let next = corners.get((k + 1) & 3).copied().unwrap_or(id);
-            f.push(
-                self.core_vertex(id as u32),
-                FeatureId::vertex(id as u32),
-                FeatureId::edge(id as u32, next as u32),
-            );
+        let face_index = (2 * axis + positive as usize).min(5);
+        let corners = FACE_CORNERS[face_index];
+        Face {
+            normal,
+            id: FeatureId::face(face_index as u32),
+            len: 4,
+            vertices: corners.map(|id| self.core_vertex(u32::from(id))),
+            vertex_ids: FACE_VERTEX_IDS[face_index],
+            edge_ids: FACE_EDGE_IDS[face_index],
         }
-        f
     }
 
     /// `m = 8 hx hy hz ρ`, `Ixx = m (hy² + hz²) / 3` and so on.
@@ -206,7 +237,7 @@ mod tests {
         let b = Cuboid::new(Vec3::new(1.0, 2.0, 3.0)).unwrap();
         for axis in 0..3 {
             for positive in [false, true] {
-                let f = b.face(axis, positive);
+                let f = b.quad(axis, positive);
                 assert_eq!(f.len, 4);
                 let p = f.points();
                 let n = (p[1] - p[0]).cross(p[2] - p[1]).normalize_or(Vec3::ZERO);

@@ -116,39 +116,43 @@ impl FeatureId {
 /// A supporting face of a core: a convex polygon in the shape's local frame, vertices in
 /// counter-clockwise order seen from outside (right-handed about `normal`). One vertex
 /// means a point, two a segment.
+///
+/// `N` is its capacity: [`MAX_FACE_VERTICES`] for the faces the public API hands out; the
+/// narrow phase keeps a box's faces in `Face<4>`, a quarter of the bytes to build, move
+/// and clip.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Face {
+pub struct Face<const N: usize = MAX_FACE_VERTICES> {
     /// Outward unit normal (local frame). For a point or segment: the query direction.
     pub normal: Vec3,
     /// The face's own id (a face, edge or vertex feature).
     pub id: FeatureId,
-    /// Number of vertices used, 1 to [`MAX_FACE_VERTICES`].
+    /// Number of vertices used, 1 to `N`.
     pub len: u8,
     /// Vertices (local frame, m).
-    pub vertices: [Vec3; MAX_FACE_VERTICES],
+    pub vertices: [Vec3; N],
     /// Feature id of each vertex.
-    pub vertex_ids: [FeatureId; MAX_FACE_VERTICES],
+    pub vertex_ids: [FeatureId; N],
     /// Feature id of the edge from vertex `i` to vertex `i + 1` (wrapping).
-    pub edge_ids: [FeatureId; MAX_FACE_VERTICES],
+    pub edge_ids: [FeatureId; N],
 }
 
-impl Face {
+impl<const N: usize> Face<N> {
     /// An empty face with the given normal and id; fill it with [`Face::push`].
-    pub const fn new(normal: Vec3, id: FeatureId) -> Face {
+    pub const fn new(normal: Vec3, id: FeatureId) -> Face<N> {
         Face {
             normal,
             id,
             len: 0,
-            vertices: [Vec3::ZERO; MAX_FACE_VERTICES],
-            vertex_ids: [FeatureId(0); MAX_FACE_VERTICES],
-            edge_ids: [FeatureId(0); MAX_FACE_VERTICES],
+            vertices: [Vec3::ZERO; N],
+            vertex_ids: [FeatureId(0); N],
+            edge_ids: [FeatureId(0); N],
         }
     }
 
     /// Append a vertex and the id of the edge that leaves it; ignored when full.
     pub fn push(&mut self, v: Vec3, vertex_id: FeatureId, edge_id: FeatureId) {
         let i = self.len as usize;
-        if i < MAX_FACE_VERTICES {
+        if i < N {
             self.vertices[i] = v;
             self.vertex_ids[i] = vertex_id;
             self.edge_ids[i] = edge_id;
@@ -156,11 +160,29 @@ impl Face {
         }
     }
 
-    /// The vertices in use: the first `len`, at most [`MAX_FACE_VERTICES`] (a `len` set
-    /// beyond it through the public field reads as a full face).
+    /// The number of vertices in use: `len`, at most `N` (a `len` set beyond it through
+    /// the public field reads as a full face).
+    #[inline]
+    fn used(&self) -> usize {
+        (self.len as usize).min(N)
+    }
+
+    /// The vertices in use: the first `len`, at most `N`.
+    #[inline]
     pub fn points(&self) -> &[Vec3] {
-        let n = (self.len as usize).min(MAX_FACE_VERTICES);
-        self.vertices.get(..n).unwrap_or(&[])
+        self.vertices.get(..self.used()).unwrap_or(&[])
+    }
+
+    /// The ids of the vertices in use.
+    #[inline]
+    pub(crate) fn used_vertex_ids(&self) -> &[FeatureId] {
+        self.vertex_ids.get(..self.used()).unwrap_or(&[])
+    }
+
+    /// The ids of the edges leaving the vertices in use.
+    #[inline]
+    pub(crate) fn used_edge_ids(&self) -> &[FeatureId] {
+        self.edge_ids.get(..self.used()).unwrap_or(&[])
     }
 
     /// Move the face into another frame in place: `x ↦ r x + t` for its vertices, `r n`
@@ -168,21 +190,79 @@ impl Face {
     #[inline]
     pub(crate) fn transform_by(&mut self, r: &Mat3, t: Vec3) {
         self.normal = r.mul_vec(self.normal);
-        let n = (self.len as usize).min(MAX_FACE_VERTICES);
+        let n = self.used();
         for v in self.vertices.iter_mut().take(n) {
             *v = r.mul_vec(*v) + t;
         }
     }
 
     /// The face moved into another frame by `iso`.
-    pub fn transformed(&self, iso: &Iso) -> Face {
+    pub fn transformed(&self, iso: &Iso) -> Face<N> {
         let mut f = *self;
         f.normal = iso.transform_vector(self.normal);
-        let n = (f.len as usize).min(MAX_FACE_VERTICES);
+        let n = f.used();
         for v in f.vertices.iter_mut().take(n) {
             *v = iso.transform_point(*v);
         }
         f
+    }
+
+    /// The same face with room for `M` vertices (the first `M` when `M < len`).
+    pub(crate) fn with_capacity<const M: usize>(&self) -> Face<M> {
+        let mut f = Face::new(self.normal, self.id);
+        for ((v, vid), eid) in self
+            .points()
+            .iter()
+            .zip(self.used_vertex_ids())
+            .zip(self.used_edge_ids())
+        {
+            f.push(*v, *vid, *eid);
+        }
+        f
+    }
+}
+
+/// What the narrow phase reads of a face, whatever its capacity: the clipper and the
+/// separating axis test take any `Face<N>` through it.
+pub(crate) trait Polygon: Copy {
+    /// Outward unit normal.
+    fn normal(&self) -> Vec3;
+    /// The face's own id.
+    fn id(&self) -> FeatureId;
+    /// The vertices in use.
+    fn points(&self) -> &[Vec3];
+    /// The ids of the vertices in use.
+    fn vertex_ids(&self) -> &[FeatureId];
+    /// The ids of the edges leaving the vertices in use.
+    fn edge_ids(&self) -> &[FeatureId];
+    /// Move into another frame in place ([`Face::transform_by`]).
+    fn transform_by(&mut self, r: &Mat3, t: Vec3);
+}
+
+impl<const N: usize> Polygon for Face<N> {
+    #[inline]
+    fn normal(&self) -> Vec3 {
+        self.normal
+    }
+    #[inline]
+    fn id(&self) -> FeatureId {
+        self.id
+    }
+    #[inline]
+    fn points(&self) -> &[Vec3] {
+        Face::points(self)
+    }
+    #[inline]
+    fn vertex_ids(&self) -> &[FeatureId] {
+        self.used_vertex_ids()
+    }
+    #[inline]
+    fn edge_ids(&self) -> &[FeatureId] {
+        self.used_edge_ids()
+    }
+    #[inline]
+    fn transform_by(&mut self, r: &Mat3, t: Vec3) {
+        Face::transform_by(self, r, t)
     }
 }
 

@@ -71,6 +71,11 @@ impl Triangle {
 
     /// The triangle itself, facing `dir`'s side.
     pub(crate) fn supporting_face(&self, dir: Vec3) -> Face {
+        self.supporting_tri(dir).with_capacity()
+    }
+
+    /// [`Triangle::supporting_face`] as a three-corner face.
+    pub(crate) fn supporting_tri(&self, dir: Vec3) -> Face<3> {
         let n = self.normal();
         let order: [usize; 3] = if n.dot(dir) >= 0.0 {
             [0, 1, 2]
