@@ -128,6 +128,9 @@ fn crossing(p: Vec3, q: Vec3, dp: f32, dq: f32) -> Vec3 {
 /// part with `d <= 0` (Sutherland–Hodgman, 1974). A point is made only where a segment
 /// crosses the plane strictly, so a vertex lying on the plane is not doubled. `closed`
 /// says whether the last vertex joins the first (a polygon) or not (a segment).
+///
+/// False, with `out` untouched, when every vertex has `d <= 0`: the clip would copy the
+/// input as it is (nothing is dropped, no segment crosses), so the input stands.
 fn clip_by_side_plane(
     input: &ClipPolygon,
     out: &mut ClipPolygon,
@@ -135,17 +138,23 @@ fn clip_by_side_plane(
     k: usize,
     incident_face: FeatureId,
     closed: bool,
-) {
+) -> bool {
     let (s, v0) = side_plane(reference, k);
-    out.vertices.clear();
     let verts = input.vertices();
     let n = verts.len();
-    let Some(first) = verts.first() else {
-        return;
-    };
-    // Signed distances, each vertex's once: the first kept for the closing segment, the
-    // next one's carried to the next iteration.
-    let d_first = s.dot(first.point - v0);
+    // Every vertex's signed distance, once. A NaN distance drops its vertex below, so it
+    // counts as outside here.
+    let mut d = [0.0f32; MAX_CLIP_POINTS];
+    let mut outside = false;
+    for (di, v) in d.iter_mut().zip(verts) {
+        *di = s.dot(v.point - v0);
+        outside |= *di > 0.0 || di.is_nan();
+    }
+    if !outside {
+        return false;
+    }
+    out.vertices.clear();
+    let d_first = d.first().copied().unwrap_or(0.0);
     let mut dp = d_first;
     // Segments i → i + 1; the closing one only for a polygon.
     let segments = if closed && n > 2 {
@@ -156,10 +165,7 @@ fn clip_by_side_plane(
     for (i, p) in verts.iter().enumerate() {
         let j = if i + 1 < n { i + 1 } else { 0 };
         let next = verts.get(j);
-        let dq = match next {
-            Some(q) if j != 0 => s.dot(q.point - v0),
-            _ => d_first,
-        };
+        let dq = d.get(j).copied().unwrap_or(d_first);
         if dp <= 0.0 {
             out.push(*p);
         }
@@ -186,6 +192,7 @@ fn clip_by_side_plane(
         }
         dp = dq;
     }
+    true
 }
 
 /// Two clipping buffers the side planes alternate between; making one costs nothing
@@ -269,7 +276,8 @@ impl ClipBuffers {
     }
 
     /// Run every side plane of `reference` over the front buffer in edge order, back and
-    /// forth between the two buffers.
+    /// forth between the two buffers (a plane that cuts nothing leaves the polygon where
+    /// it is).
     fn side_planes(
         &mut self,
         reference: &impl Polygon,
@@ -280,34 +288,25 @@ impl ClipBuffers {
         if planes < 3 {
             return &mut self.front;
         }
-        let mut k = 0;
-        while k < planes {
-            clip_by_side_plane(
-                &self.front,
-                &mut self.back,
-                reference,
-                k,
-                incident_face,
-                closed,
-            );
-            k += 1;
-            if k == planes || self.back.is_empty() {
-                return &mut self.back;
-            }
-            clip_by_side_plane(
-                &self.back,
-                &mut self.front,
-                reference,
-                k,
-                incident_face,
-                closed,
-            );
-            k += 1;
-            if self.front.is_empty() {
-                break;
+        let mut in_front = true;
+        for k in 0..planes {
+            let (from, to) = if in_front {
+                (&self.front, &mut self.back)
+            } else {
+                (&self.back, &mut self.front)
+            };
+            if clip_by_side_plane(from, to, reference, k, incident_face, closed) {
+                in_front = !in_front;
+                if to.is_empty() {
+                    break;
+                }
             }
         }
-        &mut self.front
+        if in_front {
+            &mut self.front
+        } else {
+            &mut self.back
+        }
     }
 }
 
@@ -592,6 +591,97 @@ mod tests {
             2,
             "{kinds:?}"
         );
+    }
+
+    /// Sutherland–Hodgman as written first: every plane copies the polygon into the
+    /// other buffer, whether it cuts anything or not (the oracle of the clip that lets a
+    /// plane cutting nothing leave the polygon where it is).
+    fn clip_every_plane(reference: &Face<4>, incident: &Face<4>) -> Vec<ClipVertex> {
+        let mut poly: Vec<ClipVertex> = (0..4)
+            .map(|k| ClipVertex {
+                point: incident.vertices[k],
+                ref_id: reference.id,
+                inc_id: incident.vertex_ids[k],
+                seg_ref_edge: NO_EDGE,
+                seg_inc: incident.edge_ids[k],
+            })
+            .collect();
+        for k in 0..4 {
+            let (s, v0) = side_plane(reference, k);
+            let d: Vec<f32> = poly.iter().map(|v| s.dot(v.point - v0)).collect();
+            let n = poly.len();
+            let mut out = Vec::new();
+            for i in 0..n {
+                let (p, dp) = (poly[i], d[i]);
+                if dp <= 0.0 {
+                    out.push(p);
+                }
+                let j = (i + 1) % n;
+                let (q, dq) = (poly[j], d[j]);
+                let (exits, enters) = (dp < 0.0 && dq > 0.0, dp > 0.0 && dq < 0.0);
+                if (n > 2 || i + 1 < n) && (exits || enters) {
+                    let (seg_ref_edge, seg_inc) = if exits {
+                        (k as u8, incident.id)
+                    } else {
+                        (p.seg_ref_edge, p.seg_inc)
+                    };
+                    out.push(ClipVertex {
+                        point: crossing(p.point, q.point, dp, dq),
+                        ref_id: reference_feature(reference, p.seg_ref_edge, k),
+                        inc_id: p.seg_inc,
+                        seg_ref_edge,
+                        seg_inc,
+                    });
+                }
+            }
+            poly = out;
+            if poly.is_empty() {
+                break;
+            }
+        }
+        let face_box = FaceBox::of(reference).unwrap();
+        poly.retain(|v| face_box.holds(v.point));
+        poly
+    }
+
+    /// The clip gives what clipping by every plane gives, bit for bit, for box faces
+    /// turned and moved at random (many planes cut nothing, many cut).
+    #[test]
+    fn planes_that_cut_nothing_leave_the_clip_unchanged() {
+        use crate::math::Iso;
+        let mut rng = crate::rng::SplitMix64::new(21);
+        let (a, b) = (
+            Cuboid::new(Vec3::new(0.5, 0.3, 0.8)).unwrap(),
+            Cuboid::new(Vec3::new(0.3, 0.6, 0.2)).unwrap(),
+        );
+        let (mut untouched, mut cut) = (0, 0);
+        for _ in 0..2000 {
+            let reference = a.quad(1, true);
+            let pose = Iso::new(
+                Vec3::new(rng.range(-0.8, 0.8), 0.3, rng.range(-1.0, 1.0)),
+                if rng.range(0.0, 1.0) < 0.5 {
+                    crate::math::Quat::IDENTITY
+                } else {
+                    rng.rotation()
+                },
+            );
+            let incident = b.quad(1, false).transformed(&pose);
+            let mut bufs = ClipBuffers::new();
+            let got = bufs.polygon(&reference, &incident).vertices().to_vec();
+            let want = clip_every_plane(&reference, &incident);
+            assert_eq!(std::format!("{got:?}"), std::format!("{want:?}"));
+            if got.len() == 4
+                && got
+                    .iter()
+                    .zip(incident.points())
+                    .all(|(v, p)| v.point == *p)
+            {
+                untouched += 1;
+            } else {
+                cut += 1;
+            }
+        }
+        assert!(untouched > 100 && cut > 100, "{untouched} {cut}");
     }
 
     #[test]
