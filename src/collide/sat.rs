@@ -2408,6 +2408,26 @@ mod tests {
         }
     }
 
+    /// Clip `incident` against `reference` as they are and widened to full `Face`s; assert
+    /// that both give the same manifold, bit for bit (Debug prints every float and the
+    /// sign of a zero exactly), and return whether there is one.
+    fn clips_alike<const R: usize, const I: usize>(
+        reference: &Face<R>,
+        incident: &Face<I>,
+        reference_is_a: bool,
+        margin: f32,
+    ) -> bool {
+        let (wide_ref, wide_inc): (Face, Face) =
+            (reference.with_capacity(), incident.with_capacity());
+        let (mut small, mut wide) = (LocalManifold::new(Vec3::Y), LocalManifold::new(Vec3::Y));
+        let found = clipped_face_manifold(reference, incident, reference_is_a, margin, &mut small);
+        let found_wide =
+            clipped_face_manifold(&wide_ref, &wide_inc, reference_is_a, margin, &mut wide);
+        assert_eq!(found, found_wide);
+        assert_eq!(std::format!("{small:?}"), std::format!("{wide:?}"));
+        found
+    }
+
     /// A box's faces clipped as `Face<4>` give the manifold the full-capacity `Face` gives,
     /// bit for bit (the clipper is one generic code; only the storage differs), for every
     /// face of A as the reference against B's face along it, and for B's faces against A's.
@@ -2421,41 +2441,14 @@ mod tests {
             let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.2), rng.rotation());
             let fr = Frame::new(&b_in_a);
             for f in 0..6 {
-                for reference_is_a in [true, false] {
-                    let (reference, incident) = if reference_is_a {
-                        let reference = a.polygon(f);
-                        let mut incident = b.face_along(fr.inv_vector(-reference.normal));
-                        incident.transform_by(&fr.r, fr.t);
-                        (reference, incident)
-                    } else {
-                        let mut reference = b.polygon(f);
-                        reference.transform_by(&fr.r, fr.t);
-                        (reference, a.face_along(-reference.normal))
-                    };
-                    let (wide_ref, wide_inc): (Face, Face) =
-                        (reference.with_capacity(), incident.with_capacity());
-                    let margin = 0.1;
-                    let mut quad = LocalManifold::new(Vec3::Y);
-                    let mut wide = LocalManifold::new(Vec3::Y);
-                    let found_quad = clipped_face_manifold(
-                        &reference,
-                        &incident,
-                        reference_is_a,
-                        margin,
-                        &mut quad,
-                    );
-                    let found_wide = clipped_face_manifold(
-                        &wide_ref,
-                        &wide_inc,
-                        reference_is_a,
-                        margin,
-                        &mut wide,
-                    );
-                    assert_eq!(found_quad, found_wide);
-                    // Debug prints every float (and the sign of a zero) exactly.
-                    assert_eq!(std::format!("{quad:?}"), std::format!("{wide:?}"));
-                    with_points += usize::from(found_quad);
-                }
+                let reference = a.polygon(f);
+                let mut incident = b.face_along(fr.inv_vector(-reference.normal));
+                incident.transform_by(&fr.r, fr.t);
+                with_points += usize::from(clips_alike(&reference, &incident, true, 0.1));
+                let mut reference = b.polygon(f);
+                reference.transform_by(&fr.r, fr.t);
+                let incident = a.face_along(-reference.normal);
+                with_points += usize::from(clips_alike(&reference, &incident, false, 0.1));
             }
         }
         assert!(with_points > 300, "{with_points}");
@@ -2479,25 +2472,8 @@ mod tests {
                 let reference = a.polygon(f);
                 let mut incident = b.face_along(fr.inv_vector(-reference.normal));
                 incident.transform_by(&fr.r, fr.t);
-                let (wide_ref, wide_inc): (Face, Face) =
-                    (reference.with_capacity(), incident.with_capacity());
-                for (reference_is_a, margin) in [(true, 0.1), (false, 0.3)] {
-                    let (mut small, mut wide) =
-                        (LocalManifold::new(Vec3::Y), LocalManifold::new(Vec3::Y));
-                    let found_small = if reference_is_a {
-                        clipped_face_manifold(&reference, &incident, true, margin, &mut small)
-                    } else {
-                        clipped_face_manifold(&incident, &reference, false, margin, &mut small)
-                    };
-                    let found_wide = if reference_is_a {
-                        clipped_face_manifold(&wide_ref, &wide_inc, true, margin, &mut wide)
-                    } else {
-                        clipped_face_manifold(&wide_inc, &wide_ref, false, margin, &mut wide)
-                    };
-                    assert_eq!(found_small, found_wide);
-                    assert_eq!(std::format!("{small:?}"), std::format!("{wide:?}"));
-                    with_points += usize::from(found_small);
-                }
+                with_points += usize::from(clips_alike(&reference, &incident, true, 0.1));
+                with_points += usize::from(clips_alike(&incident, &reference, false, 0.3));
             }
         }
         assert!(with_points > 200, "{with_points}");
