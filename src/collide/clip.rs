@@ -49,7 +49,8 @@ pub(crate) struct ClipPolygon {
 }
 
 impl ClipPolygon {
-    const fn new() -> ClipPolygon {
+    /// An empty polygon.
+    pub(crate) const fn new() -> ClipPolygon {
         ClipPolygon {
             vertices: heapless::Vec::new(),
         }
@@ -195,21 +196,22 @@ fn clip_by_side_plane(
     true
 }
 
-/// Two clipping buffers the side planes alternate between; making one costs nothing
-/// (the storage is not initialised), and the result is borrowed from it, never copied.
+/// Two clipping buffers the side planes alternate between, borrowed from two polygons
+/// the caller keeps as separate locals: their storage is not initialised, so making
+/// them costs two length fields. (One struct holding both polygons by value cost a
+/// 912-byte `memset` per clip: the compiler folds its making into one constant and
+/// zeroes it up to the second polygon's length.) The result is borrowed from them,
+/// never copied.
 #[derive(Debug)]
-pub(crate) struct ClipBuffers {
-    front: ClipPolygon,
-    back: ClipPolygon,
+pub(crate) struct ClipBuffers<'b> {
+    front: &'b mut ClipPolygon,
+    back: &'b mut ClipPolygon,
 }
 
-impl ClipBuffers {
-    /// Empty buffers.
-    pub(crate) const fn new() -> ClipBuffers {
-        ClipBuffers {
-            front: ClipPolygon::new(),
-            back: ClipPolygon::new(),
-        }
+impl<'b> ClipBuffers<'b> {
+    /// The buffers `front` and `back` (emptied as they are used).
+    pub(crate) fn new(front: &'b mut ClipPolygon, back: &'b mut ClipPolygon) -> ClipBuffers<'b> {
+        ClipBuffers { front, back }
     }
 
     /// Clip the incident polygon against the side planes of the reference face (both in
@@ -286,14 +288,14 @@ impl ClipBuffers {
     ) -> &mut ClipPolygon {
         let planes = reference.points().len();
         if planes < 3 {
-            return &mut self.front;
+            return self.front;
         }
         let mut in_front = true;
         for k in 0..planes {
             let (from, to) = if in_front {
-                (&self.front, &mut self.back)
+                (&*self.front, &mut *self.back)
             } else {
-                (&self.back, &mut self.front)
+                (&*self.back, &mut *self.front)
             };
             if clip_by_side_plane(from, to, reference, k, incident_face, closed) {
                 in_front = !in_front;
@@ -303,9 +305,9 @@ impl ClipBuffers {
             }
         }
         if in_front {
-            &mut self.front
+            self.front
         } else {
-            &mut self.back
+            self.back
         }
     }
 }
@@ -557,7 +559,8 @@ mod tests {
         // two edge crossings on each side.
         let reference = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(0.0, -1.0, 0.0), false);
         let incident = top_face(Vec3::new(1.0, 1.0, 1.0), Vec3::new(1.0, 1.0, 1.0), true);
-        let mut bufs = ClipBuffers::new();
+        let (mut front, mut back) = (ClipPolygon::new(), ClipPolygon::new());
+        let mut bufs = ClipBuffers::new(&mut front, &mut back);
         let out = bufs.polygon(&reference, &incident);
         let pts: Vec<Vec3> = out.vertices().iter().map(|v| v.point).collect();
         assert_eq!(pts.len(), 4, "{pts:?}");
@@ -666,7 +669,8 @@ mod tests {
                 },
             );
             let incident = b.quad(1, false).transformed(&pose);
-            let mut bufs = ClipBuffers::new();
+            let (mut front, mut back) = (ClipPolygon::new(), ClipPolygon::new());
+            let mut bufs = ClipBuffers::new(&mut front, &mut back);
             let got = bufs.polygon(&reference, &incident).vertices().to_vec();
             let want = clip_every_plane(&reference, &incident);
             assert_eq!(std::format!("{got:?}"), std::format!("{want:?}"));
@@ -689,7 +693,8 @@ mod tests {
         let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
         // Same size, exactly on top: every incident vertex lies on two side planes.
         let incident = top_face(Vec3::ONE, Vec3::new(0.0, 1.0, 0.0), true);
-        let mut bufs = ClipBuffers::new();
+        let (mut front, mut back) = (ClipPolygon::new(), ClipPolygon::new());
+        let mut bufs = ClipBuffers::new(&mut front, &mut back);
         let out = bufs.polygon(&reference, &incident);
         assert_eq!(out.vertices().len(), 4);
     }
@@ -697,7 +702,8 @@ mod tests {
     #[test]
     fn segment_clip_cuts_at_the_face_edge() {
         let reference = top_face(Vec3::ONE, Vec3::new(0.0, -1.0, 0.0), false);
-        let mut bufs = ClipBuffers::new();
+        let (mut front, mut back) = (ClipPolygon::new(), ClipPolygon::new());
+        let mut bufs = ClipBuffers::new(&mut front, &mut back);
         let out = bufs.segment(
             &reference,
             Vec3::new(0.0, 0.1, 0.0),

@@ -963,7 +963,8 @@ fn capsule_on_face(
         return None;
     }
     let (s0, s1) = c.segment();
-    let mut buffers = clip::ClipBuffers::new();
+    let (mut front, mut back) = (clip::ClipPolygon::new(), clip::ClipPolygon::new());
+    let mut buffers = clip::ClipBuffers::new(&mut front, &mut back);
     let clipped = buffers.segment(
         face,
         s0,
@@ -1067,7 +1068,8 @@ pub(crate) fn clipped_face_manifold(
     let (&[r0, _, _, ..], nr) = (reference.points(), reference.normal()) else {
         return false;
     };
-    let mut buffers = clip::ClipBuffers::new();
+    let (mut front, mut back) = (clip::ClipPolygon::new(), clip::ClipPolygon::new());
+    let mut buffers = clip::ClipBuffers::new(&mut front, &mut back);
     let clipped = buffers.polygon(reference, incident);
     let normal = if reference_is_a { nr } else { -nr };
     let mut candidates: heapless::Vec<Candidate, MAX_CLIP_POINTS> = heapless::Vec::new();

@@ -1959,7 +1959,8 @@ pub(crate) fn capsule_cuboid(
         }
         _ => {
             let f = b.quad(face.index / 2, face.index % 2 == 1);
-            let mut buffers = clip::ClipBuffers::new();
+            let (mut front, mut back) = (clip::ClipPolygon::new(), clip::ClipPolygon::new());
+            let mut buffers = clip::ClipBuffers::new(&mut front, &mut back);
             let clipped = buffers.segment(
                 &f,
                 p0,
@@ -2081,7 +2082,8 @@ pub(crate) fn capsule_triangle(
     let front = if n.dot(on_segment - v0) >= 0.0 { 0 } else { 1 };
     let f = tri.polygon(front);
     let nf = f.normal;
-    let mut buffers = clip::ClipBuffers::new();
+    let (mut front, mut back) = (clip::ClipPolygon::new(), clip::ClipPolygon::new());
+    let mut buffers = clip::ClipBuffers::new(&mut front, &mut back);
     let clipped = buffers.segment(
         &f,
         p0,

@@ -118,8 +118,8 @@ impl FeatureId {
 /// means a point, two a segment.
 ///
 /// `N` is its capacity: [`MAX_FACE_VERTICES`] for the faces the public API hands out; the
-/// narrow phase keeps a box's faces in `Face<4>`, a quarter of the bytes to build, move
-/// and clip.
+/// narrow phase keeps a box's faces in `Face<4>` and a triangle's in `Face<3>`, under a
+/// third of the bytes to build, move and clip.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Face<const N: usize = MAX_FACE_VERTICES> {
     /// Outward unit normal (local frame). For a point or segment: the query direction.
