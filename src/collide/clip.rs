@@ -155,8 +155,6 @@ fn clip_by_side_plane(
         return false;
     }
     out.vertices.clear();
-    let d_first = d.first().copied().unwrap_or(0.0);
-    let mut dp = d_first;
     // Segments i → i + 1; the closing one only for a polygon.
     let segments = if closed && n > 2 {
         n
@@ -164,34 +162,36 @@ fn clip_by_side_plane(
         n.saturating_sub(1)
     };
     for (i, p) in verts.iter().enumerate() {
-        let j = if i + 1 < n { i + 1 } else { 0 };
-        let next = verts.get(j);
-        let dq = d.get(j).copied().unwrap_or(d_first);
+        let dp = d.get(i).copied().unwrap_or(0.0);
         if dp <= 0.0 {
             out.push(*p);
         }
+        if i >= segments {
+            continue;
+        }
+        let j = if i + 1 < n { i + 1 } else { 0 };
+        let dq = d.get(j).copied().unwrap_or(0.0);
         let exits = dp < 0.0 && dq > 0.0;
         let enters = dp > 0.0 && dq < 0.0;
-        if i < segments && (exits || enters) {
-            if let Some(q) = next {
-                let ref_id = reference_feature(reference, p.seg_ref_edge, k);
-                let (seg_ref_edge, seg_inc) = if exits {
-                    // From here the clipped boundary runs along side plane k, inside the
-                    // incident polygon, until it re-enters.
-                    (k as u8, incident_face)
-                } else {
-                    (p.seg_ref_edge, p.seg_inc)
-                };
-                out.push(ClipVertex {
-                    point: crossing(p.point, q.point, dp, dq),
-                    ref_id,
-                    inc_id: p.seg_inc,
-                    seg_ref_edge,
-                    seg_inc,
-                });
-            }
+        if !(exits || enters) {
+            continue;
         }
-        dp = dq;
+        let Some(q) = verts.get(j) else { continue };
+        let ref_id = reference_feature(reference, p.seg_ref_edge, k);
+        let (seg_ref_edge, seg_inc) = if exits {
+            // From here the clipped boundary runs along side plane k, inside the
+            // incident polygon, until it re-enters.
+            (k as u8, incident_face)
+        } else {
+            (p.seg_ref_edge, p.seg_inc)
+        };
+        out.push(ClipVertex {
+            point: crossing(p.point, q.point, dp, dq),
+            ref_id,
+            inc_id: p.seg_inc,
+            seg_ref_edge,
+            seg_inc,
+        });
     }
     true
 }
