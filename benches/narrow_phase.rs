@@ -6,7 +6,9 @@
 //!
 //! The figures the narrow phase is held to: `box_box/contact_manifold` (separating axis
 //! test and clipping), `ball_box/contact_manifold` (the sphere–box closed form) and
-//! `hull_hull/gjk_distance` (GJK). `contact_cached_warm` runs the same manifold queries
+//! `hull_hull/gjk_distance` (GJK). `contact_into` is the manifold query writing into one
+//! manifold the loop keeps (no copy of the answer; `contact_manifold` returns each
+//! manifold by value). `contact_cached_warm` runs the same manifold queries
 //! with one `PairCache` per query kept from the previous iteration, as a pair that stays
 //! put between steps would (the answers are the same; only the time may differ).
 //!
@@ -14,7 +16,9 @@
 
 use std::hint::black_box;
 
-use carom::collide::{contact, contact_cached, distance, penetration, PairCache, SimplexCache};
+use carom::collide::{
+    contact, contact_cached, contact_into, distance, penetration, Manifold, PairCache, SimplexCache,
+};
 use carom::math::Vec3;
 use carom::scenes::queries::{
     self, PoseQuery, QuerySet, BALL_RADIUS, BOX_HALF, CONTACT_MARGIN, HULLS, HULL_POINTS, PAIRS,
@@ -81,6 +85,25 @@ fn bench_set(c: &mut Criterion, set: &PairSet<'_>) {
             for q in &set.queries {
                 let (a, b) = set.shapes(q);
                 black_box(&contact(a, &q.pose_a, b, &q.pose_b, CONTACT_MARGIN));
+            }
+        })
+    });
+    group.bench_function("contact_into", |bench| {
+        let mut m = Manifold::default();
+        bench.iter(|| {
+            for q in &set.queries {
+                let (a, b) = set.shapes(q);
+                let mut cache = PairCache::default();
+                let found = contact_into(
+                    a,
+                    &q.pose_a,
+                    b,
+                    &q.pose_b,
+                    CONTACT_MARGIN,
+                    &mut cache,
+                    &mut m,
+                );
+                black_box((found.ok(), &m));
             }
         })
     });

@@ -4,8 +4,8 @@
 //! symmetry, and the property that the pair cache never changes an answer.
 
 use carom::collide::{
-    contact, contact_cached, contact_gjk_epa, distance, penetration, ContactId, Manifold,
-    PairCache, SatAxis, SimplexCache, SAT_TOLERANCE,
+    contact, contact_cached, contact_gjk_epa, contact_into, distance, penetration, ContactId,
+    Manifold, PairCache, SatAxis, SimplexCache, SAT_TOLERANCE,
 };
 use carom::math::{Iso, Quat, Vec3};
 use carom::props::{
@@ -549,6 +549,60 @@ fn the_result_never_depends_on_the_cache() {
     }
     // The box and hull pairs that are apart leave the separating axis in the cache.
     assert!(hits > 1000, "{hits}");
+}
+
+/// `contact_into` gives `contact_cached`'s manifold bit for bit, into a manifold that
+/// still holds the previous pair's (so nothing is read from it), with `len` 0 when apart;
+/// on bad input it fails as `contact` does and leaves the manifold as it was.
+#[test]
+fn contact_into_writes_the_returned_manifold() {
+    let hulls = hulls();
+    let mut m = Manifold::default();
+    let (mut found, mut apart) = (0, 0);
+    for (name, a, b, q) in pairs(&hulls) {
+        let mut cache = PairCache::default();
+        let reference =
+            contact_cached(&a, &q.pose_a, &b, &q.pose_b, CONTACT_MARGIN, &mut cache).unwrap();
+        let mut cache = PairCache::default();
+        let hit = contact_into(
+            &a,
+            &q.pose_a,
+            &b,
+            &q.pose_b,
+            CONTACT_MARGIN,
+            &mut cache,
+            &mut m,
+        )
+        .unwrap();
+        assert_eq!(hit, reference.is_some(), "{name} {q:?}");
+        if hit {
+            found += 1;
+            assert_eq!(bits(&Some(m)), bits(&reference), "{name} {q:?}");
+        } else {
+            apart += 1;
+            assert_eq!(m.len, 0, "{name} {q:?}");
+        }
+    }
+    assert!(found > 1000 && apart > 1000, "{found} {apart}");
+    // Bad input: the error of `contact`, the manifold untouched (the last pair's).
+    let before = format!("{m:?}");
+    let cube = Shape::cuboid(Vec3::splat(BOX_HALF)).unwrap();
+    let bad_pose = Iso::from_position(Vec3::new(f32::NAN, 0.0, 0.0));
+    for (pose_a, margin) in [(bad_pose, CONTACT_MARGIN), (Iso::IDENTITY, -1.0)] {
+        let want = contact(&cube, &pose_a, &cube, &Iso::IDENTITY, margin).unwrap_err();
+        let mut cache = PairCache::default();
+        let got = contact_into(
+            &cube,
+            &pose_a,
+            &cube,
+            &Iso::IDENTITY,
+            margin,
+            &mut cache,
+            &mut m,
+        );
+        assert_eq!(got, Err(want));
+        assert_eq!(format!("{m:?}"), before);
+    }
 }
 
 #[test]

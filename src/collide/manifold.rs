@@ -183,13 +183,10 @@ pub fn contact_cached(
     margin: f32,
     cache: &mut PairCache,
 ) -> Result<Option<Manifold>, Error> {
-    check_pose(pose_a)?;
-    check_pose(pose_b)?;
-    a.check_convex()?;
-    b.check_convex()?;
-    non_negative(margin, Input::Distance)?;
-    // Built where it is returned: a manifold is about 256 bytes, and copying it into the
-    // result cost a fifth of a sphere-box query.
+    check_inputs(a, pose_a, b, pose_b, margin)?;
+    // Built in the result, not in a local moved into it at the end (the compiler made two
+    // copies of that). It still builds the result in a local of its own and copies it out
+    // once, about 256 bytes: [`contact_into`] writes in place.
     let mut result = Ok(Some(Manifold::default()));
     let found = match &mut result {
         Ok(Some(m)) => dispatch(a, pose_a, b, pose_b, margin, Route::Fast(cache), m),
@@ -199,6 +196,68 @@ pub fn contact_cached(
         result = Ok(None);
     }
     result
+}
+
+/// [`contact_cached`] into the caller's manifold: true when the shapes are within
+/// `margin`, with the manifold in `out` (the same one, bit for bit); false when they are
+/// further apart, with `out.len` 0 (its other fields unspecified). A returned manifold is
+/// copied out once (about 256 bytes, 14 % of a sphere–box query on x86_64); a caller that
+/// keeps one to fill, such as a loop over many pairs or firmware, saves that copy. Fails
+/// like [`contact`], with `out` unchanged.
+///
+/// # Examples
+///
+/// ```
+/// use carom::collide::{contact_into, Manifold, PairCache};
+/// use carom::{Iso, Shape, Vec3};
+///
+/// # fn main() -> Result<(), carom::Error> {
+/// let ground = Shape::cuboid(Vec3::new(5.0, 0.5, 5.0))?;
+/// let ball = Shape::sphere(0.5)?;
+/// let ground_pose = Iso::from_position(Vec3::new(0.0, -0.5, 0.0));
+/// let mut m = Manifold::default();
+/// let mut cache = PairCache::default();
+/// for height in [0.49, 0.55] {
+///     let ball_pose = Iso::from_position(Vec3::new(0.0, height, 0.0));
+///     let touching = contact_into(&ground, &ground_pose, &ball, &ball_pose, 0.02, &mut cache, &mut m)?;
+///     assert_eq!(touching, height < 0.5);
+///     assert_eq!(m.points().len(), usize::from(touching));
+/// }
+/// # Ok(())
+/// # }
+/// ```
+pub fn contact_into(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    cache: &mut PairCache,
+    out: &mut Manifold,
+) -> Result<bool, Error> {
+    check_inputs(a, pose_a, b, pose_b, margin)?;
+    let found = dispatch(a, pose_a, b, pose_b, margin, Route::Fast(cache), out);
+    if !found {
+        out.len = 0;
+    }
+    Ok(found)
+}
+
+/// The checks at the door of [`contact`] and its kin: valid poses, convex shapes, a
+/// finite margin `>= 0`.
+fn check_inputs(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+) -> Result<(), Error> {
+    check_pose(pose_a)?;
+    check_pose(pose_b)?;
+    a.check_convex()?;
+    b.check_convex()?;
+    non_negative(margin, Input::Distance)?;
+    Ok(())
 }
 
 /// The general path of [`contact`] for every pair, without the separating axis test and
@@ -212,11 +271,7 @@ pub fn contact_gjk_epa(
     pose_b: &Iso,
     margin: f32,
 ) -> Result<Option<Manifold>, Error> {
-    check_pose(pose_a)?;
-    check_pose(pose_b)?;
-    a.check_convex()?;
-    b.check_convex()?;
-    non_negative(margin, Input::Distance)?;
+    check_inputs(a, pose_a, b, pose_b, margin)?;
     let mut m = Manifold::default();
     let found = dispatch(a, pose_a, b, pose_b, margin, Route::General, &mut m);
     Ok(found.then_some(m))

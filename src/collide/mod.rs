@@ -9,7 +9,8 @@
 //!   overlapping), the normal and the witness points, whichever the case.
 //! - [`contact`]: a contact manifold of up to 4 points with feature ids; [`contact_cached`]
 //!   the same with a per-pair [`PairCache`] (box and hull pairs, and either against a
-//!   triangle, by the separating axis test), [`contact_gjk_epa`] the general GJK/EPA path for every pair.
+//!   triangle, by the separating axis test), [`contact_into`] the same into the caller's
+//!   manifold, [`contact_gjk_epa`] the general GJK/EPA path for every pair.
 //! - [`time_of_impact`]: when two moving shapes first touch.
 //! - [`movement_bounds`]: the box a shape sweeps over a step.
 
@@ -27,7 +28,7 @@ pub use analytic::segment_closest_points;
 pub use epa::{penetration, EpaStatus, Penetration, MAX_EPA_FACES, MAX_EPA_VERTICES};
 pub use gjk::{distance, intersects, DistanceOutput, GjkStatus, SimplexCache, MAX_GJK_ITERATIONS};
 pub use manifold::{
-    contact, contact_cached, contact_gjk_epa, ContactId, Manifold, ManifoldPoint,
+    contact, contact_cached, contact_gjk_epa, contact_into, ContactId, Manifold, ManifoldPoint,
     MAX_MANIFOLD_POINTS,
 };
 pub use sat::{PairCache, SatAxis, EDGE_DEPTH_PREFERENCE, SAT_TOLERANCE};
