@@ -3,8 +3,8 @@
 
 use super::{accepted_pose, check, shape_size_in_range, Violation};
 use crate::collide::{
-    contact, distance, penetration, EpaStatus, Manifold, SimplexCache, EDGE_DEPTH_PREFERENCE,
-    MAX_MANIFOLD_POINTS,
+    contact, contact_into, distance, penetration, EpaStatus, Manifold, PairCache, SimplexCache,
+    EDGE_DEPTH_PREFERENCE, MAX_MANIFOLD_POINTS,
 };
 use crate::math::{scalar, Iso, Vec3};
 use crate::shape::Shape;
@@ -39,6 +39,8 @@ pub const AGREE_REL: f32 = 0.005;
 ///
 /// - it never panics; it refuses exactly the invalid inputs (poses refused by
 ///   [`accepted_pose`], negative or non-finite margin);
+/// - [`contact_into`] gives the same answer (the same error, or the same manifold bit
+///   for bit, `len` 0 when apart), over a manifold that held other numbers;
 /// - a manifold has 1 to [`MAX_MANIFOLD_POINTS`] points, all finite, a unit normal, and
 ///   every separation `<= margin`;
 ///
@@ -68,6 +70,7 @@ pub fn manifold_properties(
     let valid =
         accepted_pose(pose_a) && accepted_pose(pose_b) && margin.is_finite() && margin >= 0.0;
     let result = contact(a, pose_a, b, pose_b, margin);
+    into_agrees(a, pose_a, b, pose_b, margin, &result)?;
     let Ok(found) = result else {
         return check(!valid, "manifold: valid input refused");
     };
@@ -113,6 +116,55 @@ pub fn manifold_properties(
     }
     agrees_with_gjk_epa(a, pose_a, b, pose_b, &m, scale)?;
     symmetric(a, given_a, b, given_b, margin, &m, scale)
+}
+
+/// [`contact_into`] answers as [`contact`] did (`result`), written over a manifold of
+/// other numbers.
+fn into_agrees(
+    a: &Shape,
+    pose_a: &Iso,
+    b: &Shape,
+    pose_b: &Iso,
+    margin: f32,
+    result: &Result<Option<Manifold>, crate::Error>,
+) -> Result<(), Violation> {
+    let mut out = Manifold {
+        normal: Vec3::splat(7.0),
+        len: 3,
+        ..Manifold::default()
+    };
+    let got = contact_into(
+        a,
+        pose_a,
+        b,
+        pose_b,
+        margin,
+        &mut PairCache::default(),
+        &mut out,
+    );
+    let agrees = match (result, got) {
+        (Err(want), Err(got)) => *want == got,
+        (Ok(None), Ok(false)) => out.len == 0,
+        (Ok(Some(m)), Ok(true)) => same_bits(m, &out),
+        _ => false,
+    };
+    check(agrees, "manifold: contact_into differs from contact")
+}
+
+/// The two manifolds' used parts are equal to the bit.
+fn same_bits(m: &Manifold, n: &Manifold) -> bool {
+    let v = |x: Vec3| [x.x.to_bits(), x.y.to_bits(), x.z.to_bits()];
+    let point = |p: &crate::collide::ManifoldPoint| {
+        let [a, b, c, d] = [p.point_a, p.point_b, p.local_a, p.local_b].map(v);
+        (a, b, c, d, p.separation.to_bits(), p.id)
+    };
+    m.len == n.len
+        && m.depth_bound == n.depth_bound
+        && v(m.normal) == v(n.normal)
+        && m.points()
+            .iter()
+            .map(point)
+            .eq(n.points().iter().map(point))
 }
 
 /// Point count, finiteness, unit normal, separations within the margin.
