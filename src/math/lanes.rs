@@ -85,7 +85,25 @@ impl F4 {
         finite.gt_select(F4::ZERO, F4::splat(1.0).div(finite), F4::ZERO)
     }
 
+    /// Lane-wise [`scalar::sqrt`]: on x86 with SSE (every x86_64 build) one `sqrtps`
+    /// through `safe_arch` (IEEE's correctly rounded root in each lane, so the bits of
+    /// [`scalar::sqrt`]); elsewhere, and with `micromath`, [`scalar::sqrt`] per lane.
+    #[cfg(all(
+        not(feature = "micromath"),
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    ))]
+    #[inline]
+    pub fn sqrt(self) -> F4 {
+        F4(safe_arch::sqrt_m128(safe_arch::m128::from_array(self.0)).to_array())
+    }
+
     /// Lane-wise [`scalar::sqrt`].
+    #[cfg(not(all(
+        not(feature = "micromath"),
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "sse"
+    )))]
     #[inline]
     pub fn sqrt(self) -> F4 {
         let [a0, a1, a2, a3] = self.0;
