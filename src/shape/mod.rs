@@ -237,9 +237,16 @@ pub(crate) trait Polygon: Copy {
     fn edge_ids(&self) -> &[FeatureId];
     /// Move into another frame in place ([`Face::transform_by`]).
     fn transform_by(&mut self, r: &Mat3, t: Vec3);
+    /// True for a face whose corners are all right angles: a box's face (`Face<4>`,
+    /// which holds nothing else). Its side planes meet square, so a clipped point that
+    /// passes them lies in the face up to rounding, and the clip leaves out the box test
+    /// that catches points past a sliver's tip (`collide::clip`).
+    const RIGHT_ANGLED: bool = false;
 }
 
 impl<const N: usize> Polygon for Face<N> {
+    /// `Face<4>` holds a box's faces only (type docs).
+    const RIGHT_ANGLED: bool = N == 4;
     #[inline]
     fn normal(&self) -> Vec3 {
         self.normal
