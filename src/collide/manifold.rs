@@ -634,10 +634,11 @@ fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
         Shape::HeightField(_) => 8,
         Shape::Compound(_) => 7,
     };
+    // Lazily: each comparison only when the ones before it tie.
     let vec = |u: Vec3, v: Vec3| {
         u.x.total_cmp(&v.x)
-            .then(u.y.total_cmp(&v.y))
-            .then(u.z.total_cmp(&v.z))
+            .then_with(|| u.y.total_cmp(&v.y))
+            .then_with(|| u.z.total_cmp(&v.z))
     };
     let points = |p: &[Vec3], q: &[Vec3]| {
         let mut o = p.len().cmp(&q.len());
@@ -662,9 +663,9 @@ fn pair_order(a: &Shape, pose_a: &Iso, b: &Shape, pose_b: &Iso) -> Ordering {
     };
     let (qa, qb) = (pose_a.rotation, pose_b.rotation);
     geometry
-        .then(vec(pose_a.position, pose_b.position))
-        .then(vec(qa.xyz(), qb.xyz()))
-        .then(qa.w.total_cmp(&qb.w))
+        .then_with(|| vec(pose_a.position, pose_b.position))
+        .then_with(|| vec(qa.xyz(), qb.xyz()))
+        .then_with(|| qa.w.total_cmp(&qb.w))
 }
 
 /// The general path of a pair in canonical order (module docs), in A's frame: closed
