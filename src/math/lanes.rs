@@ -5,7 +5,8 @@
 //! reciprocal estimates, no horizontal sums). A compiler that vectorises these loops
 //! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32) and one that does not (a
 //! Cortex-M) produce the same bits lane for lane, so the golden checksums hold across
-//! targets. Written as plain arrays: no intrinsics, no `unsafe`.
+//! targets. Written as plain arrays, no `unsafe`; the one intrinsic is the square root
+//! on x86 ([`F4::sqrt`], `safe_arch`'s `sqrtps`: correctly rounded, the same bits).
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
