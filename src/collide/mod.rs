@@ -46,8 +46,19 @@ use crate::math::{Iso, Mat3, Quat, Vec3};
 use crate::shape::Shape;
 
 /// Check a pose given at a public door: a finite position within
-/// ±[`crate::error::MAX_COORDINATE`], a finite unit rotation.
+/// ±[`crate::error::MAX_COORDINATE`], a finite unit rotation. A pose that passes (nearly
+/// all) is told apart in one branch ([`pose_passes`]).
+#[inline]
 pub(crate) fn check_pose(pose: &Iso) -> Result<(), Error> {
+    if pose_passes(pose) {
+        return Ok(());
+    }
+    first_pose_error(pose)
+}
+
+/// [`check_pose`] one check at a time: the first failure's error.
+#[cold]
+fn first_pose_error(pose: &Iso) -> Result<(), Error> {
     crate::error::position(pose.position)?;
     if !pose.rotation.is_finite() {
         return Err(Error::NonFinite(Input::Rotation));
@@ -56,6 +67,19 @@ pub(crate) fn check_pose(pose: &Iso) -> Result<(), Error> {
         return Err(Error::NotUnit(Input::Rotation));
     }
     Ok(())
+}
+
+/// `check_pose(pose).is_ok()` in four compares without a branch, for the doors' common
+/// case: each compare is false for NaN and the infinities, so the finiteness checks are
+/// implied (a rotation whose `|q|²` lies within the unit tolerance of 1 has finite
+/// components). The first failing check, with its error, is [`first_pose_error`]'s.
+#[inline]
+pub(crate) fn pose_passes(pose: &Iso) -> bool {
+    let p = pose.position;
+    let within = |x: f32| crate::math::scalar::abs(x) <= crate::error::MAX_COORDINATE;
+    let l2 = pose.rotation.length_squared();
+    let unit = crate::math::scalar::abs(l2 - 1.0) <= crate::math::UNIT_TOLERANCE;
+    within(p.x) & within(p.y) & within(p.z) & unit
 }
 
 /// B's pose in A's frame, with its rotation as a matrix: what a query in A's frame needs.
@@ -236,5 +260,72 @@ impl<'s, 'a> Proxy<'s, 'a> {
         } else {
             self.rotation.mul_vec(p) + self.pose.position
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::error::MAX_COORDINATE;
+
+    /// `pose_passes` is `first_pose_error(..).is_ok()` (the checks one by one): over positions and rotations built from
+    /// special values (NaN, the infinities, zeros, the coordinate bound and its
+    /// neighbours, huge and tiny numbers) and random ones, including rotations just
+    /// inside and outside the unit tolerance.
+    #[test]
+    fn pose_passes_exactly_when_check_pose_does() {
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.0,
+            0.5,
+            MAX_COORDINATE,
+            -MAX_COORDINATE,
+            f32::from_bits(MAX_COORDINATE.to_bits() + 1),
+            f32::from_bits(MAX_COORDINATE.to_bits() - 1),
+            1.0e20,
+            -3.0e38,
+            f32::MIN_POSITIVE,
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        let mut rng = crate::rng::SplitMix64::new(5);
+        let (mut passed, mut failed) = (0, 0);
+        for i in 0..20_000u32 {
+            let pick = |rng: &mut crate::rng::SplitMix64| {
+                let k = (rng.next_u64() % 20) as usize;
+                specials
+                    .get(k)
+                    .copied()
+                    .unwrap_or_else(|| rng.range(-2.0e4, 2.0e4))
+            };
+            let position = Vec3::new(pick(&mut rng), pick(&mut rng), pick(&mut rng));
+            let rotation = match i % 4 {
+                // Unit, scaled to |q|² near the tolerance's edges, or from special values.
+                0 => rng.rotation(),
+                1 => {
+                    let q = rng.rotation();
+                    let s = crate::math::scalar::sqrt(1.0 + rng.range(-2.0e-3, 2.0e-3));
+                    Quat::from_xyzw(q.x * s, q.y * s, q.z * s, q.w * s)
+                }
+                _ => Quat::from_xyzw(
+                    pick(&mut rng),
+                    pick(&mut rng),
+                    pick(&mut rng),
+                    pick(&mut rng),
+                ),
+            };
+            let pose = Iso::new(position, rotation);
+            let fast = pose_passes(&pose);
+            assert_eq!(fast, first_pose_error(&pose).is_ok(), "{pose:?}");
+            if fast {
+                passed += 1;
+            } else {
+                failed += 1;
+            }
+        }
+        assert!(passed > 1_000 && failed > 1_000, "{passed} {failed}");
     }
 }
