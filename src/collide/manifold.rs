@@ -797,11 +797,13 @@ fn to_world(
             separation: c.separation,
             id: c.id,
         };
+        // `&`, not `&&`: the points are nearly always finite, so every check runs anyway,
+        // and one branch replaces four.
         let finite = p.point_a.is_finite()
-            && p.point_b.is_finite()
-            && p.local_b.is_finite()
-            && p.separation.is_finite();
-        if finite && p.separation <= margin {
+            & p.point_b.is_finite()
+            & p.local_b.is_finite()
+            & p.separation.is_finite();
+        if finite & (p.separation <= margin) {
             if let Some(slot) = m.points.get_mut(len) {
                 *slot = p;
                 len += 1;
