@@ -13,7 +13,7 @@
 
 use super::super::body::{Body, BodyKind};
 use super::super::contact::Contact;
-use super::super::contact_solver::{clip_to_disc, sides, torque_free, Softness};
+use super::super::contact_solver::{clip_to_disc, sides, torque_free, Sides, Softness};
 use super::super::pool::Pool;
 use super::super::solver::{SolverBody, NONE};
 use super::super::support::Supports;
@@ -130,42 +130,44 @@ pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
 ) {
     x.clear_lanes();
     let [c0, c1, c2, c3] = *lanes;
+    // The four lanes' bodies first: each lane's first reads of its contact and of its
+    // bodies miss the cache more often than not, and looked up together those misses
+    // overlap instead of waiting on each other.
+    let (b, sb, si) = (bodies, solver_bodies, solver_index);
+    let side = |ci: u32| {
+        let c = contacts.get(ci as usize)?;
+        Some((c, sides::<N, CAPPED>(c, b, sb, si, supports)?))
+    };
+    let four = [side(c0), side(c1), side(c2), side(c3)];
     // Lane by lane with the lane a constant, so each lane's writes are plain stores.
-    let mut lane = |l: usize, ci: u32| {
-        if let Some(c) = contacts.get(ci as usize) {
-            let (b, sb, si) = (bodies, solver_bodies, solver_index);
-            gather_lane::<N, CAPPED>(group, x, l, ci, c, b, sb, si, softness, supports);
+    let [s0, s1, s2, s3] = four;
+    let mut lane = |l: usize, ci: u32, found: Option<(&Contact, Sides<'_, '_>)>| {
+        if let Some((c, side)) = found {
+            gather_lane(group, x, l, ci, c, side, softness);
         }
     };
-    lane(0, c0);
-    lane(1, c1);
-    lane(2, c2);
-    lane(3, c3);
+    lane(0, c0, s0);
+    lane(1, c1, s1);
+    lane(2, c2, s2);
+    lane(3, c3, s3);
     if x.on == [false; 4] {
         return;
     }
     prepare_rows(group, x, lanes, contacts, cfg);
 }
 
-/// Lane `l`'s inputs (contact `ci`), the checks of the scalar prepare, and the per-lane
-/// values the rows copy as they are (the softness too).
-#[allow(clippy::too_many_arguments)]
+/// Lane `l`'s inputs (contact `ci`, whose bodies are `side`: the checks of the scalar
+/// prepare passed) and the per-lane values the rows copy as they are (the softness too).
 #[inline(always)]
-fn gather_lane<const N: usize, const CAPPED: bool>(
+fn gather_lane(
     group: &mut Group<'_>,
     x: &mut Inputs,
     l: usize,
     ci: u32,
     c: &Contact,
-    bodies: &Pool<Body<'_>, N>,
-    solver_bodies: &[SolverBody],
-    solver_index: &[u32; N],
+    side: Sides<'_, '_>,
     softness: &[Softness; 2],
-    supports: &Supports<'_>,
 ) {
-    let Some(side) = sides::<N, CAPPED>(c, bodies, solver_bodies, solver_index, supports) else {
-        return;
-    };
     let (body_a, body_b, sa, sb) = (side.body_a, side.body_b, side.sa, side.sb);
     let (ia, ib) = (side.ia, side.ib);
     let (m_a, i_a, m_b, i_b) = (side.m_a, side.i_a, side.m_b, side.i_b);
