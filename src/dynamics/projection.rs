@@ -55,6 +55,11 @@ pub(crate) fn project<const N: usize, const C: usize>(
     for sb in solver.bodies.iter_mut() {
         sb.projected = 0.0;
     }
+    // The solve's last pass measured every point and found none that deep: nothing to
+    // look at (the same points the loop below would skip, without reading the store).
+    if solver.store.deep == Some(false) {
+        return;
+    }
     for _ in 0..cfg.position_iterations {
         for g in 0..solver.store.groups as usize {
             for l in 0..4 {

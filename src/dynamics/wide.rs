@@ -211,6 +211,10 @@ pub(crate) struct WideStore<const C: usize> {
     /// The first overflow group (groups from here on are solved in runs of lanes that
     /// share no moving body).
     pub overflow_from: u32,
+    /// Whether some point was left deeper than `projection::DEEP_SLOPS` slops by the
+    /// step's last pass (which measures every point's separation as projection reads
+    /// it); `None` before that pass, as after [`WideStore::reset`].
+    pub deep: Option<bool>,
 }
 
 impl<const C: usize> WideStore<C> {
@@ -221,6 +225,7 @@ impl<const C: usize> WideStore<C> {
             extra: HVec::new(),
             groups: 0,
             overflow_from: 0,
+            deep: None,
         }
     }
 
@@ -232,6 +237,7 @@ impl<const C: usize> WideStore<C> {
     pub fn reset(&mut self, groups: usize) -> bool {
         self.groups = 0;
         self.overflow_from = 0;
+        self.deep = None;
         let slots = groups.saturating_mul(4);
         if slots > C + PAD_SLOTS {
             return false;
@@ -953,6 +959,9 @@ fn solve_with<const C: usize>(
     a: (&WorldConfig, f32, Pass),
     runs: Runs,
 ) {
+    // The last pass notes whether projection has a point to look at (its threshold).
+    let deep = -super::projection::DEEP_SLOPS * a.0.slop;
+    let mut any_deep = false;
     for g in 0..store.groups as usize {
         let overflow = g as u32 >= store.overflow_from;
         let Some(mut group) = store.group(g) else {
@@ -987,6 +996,12 @@ fn solve_with<const C: usize>(
                 _ => solve_group::<4, true, true>(g, bodies, a, (*mask, *mask)),
             }
         }
+        if a.2.last && !any_deep {
+            any_deep = (0..4).any(|l| group.contact(l) != NONE && group.deeper_than(l, deep));
+        }
+    }
+    if a.2.last {
+        store.deep = Some(any_deep);
     }
 }
 
