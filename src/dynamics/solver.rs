@@ -313,6 +313,7 @@ fn plan<const N: usize, const C: usize>(
         gravity: cfg.gravity,
     };
     let mut inputs = wide::PrepareInputs::default();
+    let mut bouncy = false;
     let mut prepare = |g: usize, batch: &[u32; 4]| {
         let Some(mut group) = store.group(g) else {
             return;
@@ -333,6 +334,8 @@ fn plan<const N: usize, const C: usize>(
                 x, group, batch, contacts, bodies, sb, si, soft, sup, cfg,
             );
         }
+        // Whether the collision pass has a lane to visit: read while the group is hot.
+        bouncy |= group.has_restitution();
     };
     for &(colour, ci) in scratch.iter() {
         if let Some(c) = last {
@@ -359,6 +362,7 @@ fn plan<const N: usize, const C: usize>(
         Some(g) if last == Some(wide::OVERFLOW) => g,
         _ => store.groups,
     };
+    store.bouncy = bouncy;
 }
 
 /// Classes of contacts by point count (1, 2, 3, 4 points), the order of a colour's
@@ -500,6 +504,10 @@ fn bounce<const C: usize>(
     contacts: &[Contact],
     cfg: &WorldConfig,
 ) {
+    // No lane has restitution (the plan noted it): the sweeps below would skip every one.
+    if !store.bouncy {
+        return;
+    }
     for _ in 0..contact_solver::MAX_BOUNCE_PASSES {
         let mut bounced = false;
         for g in 0..store.groups as usize {

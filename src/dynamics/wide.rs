@@ -215,6 +215,9 @@ pub(crate) struct WideStore<const C: usize> {
     /// step's last pass (which measures every point's separation as projection reads
     /// it); `None` before that pass, as after [`WideStore::reset`].
     pub deep: Option<bool>,
+    /// Whether some lane holding a contact has restitution (set by the plan as it
+    /// prepares the groups): the collision pass has none to look at otherwise.
+    pub bouncy: bool,
 }
 
 impl<const C: usize> WideStore<C> {
@@ -226,6 +229,7 @@ impl<const C: usize> WideStore<C> {
             groups: 0,
             overflow_from: 0,
             deep: None,
+            bouncy: false,
         }
     }
 
@@ -238,6 +242,7 @@ impl<const C: usize> WideStore<C> {
         self.groups = 0;
         self.overflow_from = 0;
         self.deep = None;
+        self.bouncy = false;
         let slots = groups.saturating_mul(4);
         if slots > C + PAD_SLOTS {
             return false;
@@ -388,6 +393,12 @@ impl Group<'_> {
     /// The restitution of lane `l`.
     pub fn restitution(&self, l: usize) -> f32 {
         f4(&self.s0.s, RESTITUTION).lane(l)
+    }
+
+    /// True when a lane holding a contact has restitution (the lanes the restitution
+    /// passes visit).
+    pub fn has_restitution(&self) -> bool {
+        (0..4).any(|l| self.contact(l) != NONE && self.restitution(l) > 0.0)
     }
 
     /// True when some lane has restitution: only those lanes' restitution records are
