@@ -94,6 +94,8 @@ pub(crate) struct Inputs {
     local_b: [V4; 4],
     separation: [F4; 4],
     impulse: [F4; 4],
+    /// Where [`touch`] leaves its reads (never read back).
+    touched: u32,
 }
 
 impl Inputs {
@@ -139,6 +141,7 @@ pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
         Some((c, sides::<N, CAPPED>(c, b, sb, si, supports)?))
     };
     let four = [side(c0), side(c1), side(c2), side(c3)];
+    x.touched = touch(&four);
     // Lane by lane with the lane a constant, so each lane's writes are plain stores.
     let [s0, s1, s2, s3] = four;
     let mut lane = |l: usize, ci: u32, found: Option<(&Contact, Sides<'_, '_>)>| {
@@ -154,6 +157,33 @@ pub(crate) fn prepare_group<const N: usize, const CAPPED: bool>(
         return;
     }
     prepare_rows(group, x, lanes, contacts, cfg);
+}
+
+/// One read from each part of memory the gather of the lanes `four` will read: each
+/// contact's points, normal and friction impulse, each body's pose and centre, each
+/// solver body's velocity and rotation. Those are cache misses more often than not
+/// (`spheres`, `pyramid100`: the contacts and bodies outgrow the cache; the prepare
+/// visits them in colour order), and the gather reads them lane after lane, each miss
+/// waiting on the last. Read here first, all four lanes' misses are in flight at once.
+/// The values are folded into one word the caller stores, so the reads stay: they
+/// change nothing else. (`jolt_pyramid` about 4 % less time, `spheres` 3 to 7 %,
+/// `pyramid100` 2 %.)
+#[inline(always)]
+fn touch(four: &[Option<(&Contact, Sides<'_, '_>)>; 4]) -> u32 {
+    let mut t = 0u32;
+    for (c, side) in four.iter().flatten() {
+        t ^= c.normal.x.to_bits() ^ c.friction_impulse.x.to_bits();
+        for p in c.points() {
+            t ^= p.separation.to_bits();
+        }
+        for b in [side.body_a, side.body_b] {
+            t ^= b.pose().position.x.to_bits() ^ b.world_center().x.to_bits();
+        }
+        for sb in [side.sa, side.sb].into_iter().flatten() {
+            t ^= sb.v.x.to_bits() ^ sb.rot.z.z.to_bits();
+        }
+    }
+    t
 }
 
 /// Lane `l`'s inputs (contact `ci`, whose bodies are `side`: the checks of the scalar
