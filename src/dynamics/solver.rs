@@ -1171,6 +1171,61 @@ mod tests {
         }
     }
 
+    /// The flags the skipped passes read are what their scans would have found: after a
+    /// step, `deep` says whether some lane holding a contact has a point deeper than
+    /// projection's threshold (brute force over the store), and `bouncy` whether some
+    /// such lane has restitution. Both answers are seen: a box sunk 20 cm into the ground
+    /// (deep, no bounce) and a resting box beside a bouncing ball (bounce, nothing deep).
+    #[test]
+    fn skipped_passes_see_what_their_scans_would() {
+        let ground = Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap();
+        let cube = Shape::cuboid(Vec3::new(0.5, 0.5, 0.5)).unwrap();
+        let ball = Shape::sphere(0.3).unwrap();
+        let bouncy = Material {
+            restitution: 0.7,
+            ..Material::DEFAULT
+        };
+        let scan = |w: &mut World<'static, 64, 512, 64>| {
+            let deep = -crate::dynamics::projection::DEEP_SLOPS * w.config.slop;
+            let store = &mut w.solver.store;
+            let (mut any_deep, mut any_bouncy) = (false, false);
+            for g in 0..store.groups as usize {
+                let group = store.group(g).unwrap();
+                for l in 0..4 {
+                    if group.contact(l) != NONE {
+                        any_deep |= group.deeper_than(l, deep);
+                        any_bouncy |= group.restitution(l) > 0.0;
+                    }
+                }
+            }
+            (store.deep, any_deep, store.bouncy, any_bouncy)
+        };
+        let mut sunk: World<64, 512, 64> = World::new();
+        sunk.add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+            .unwrap();
+        sunk.add(BodyDesc::dynamic(cube).position(Vec3::new(0.0, 0.3, 0.0)))
+            .unwrap();
+        sunk.step();
+        assert_eq!(scan(&mut sunk), (Some(true), true, false, false));
+        let mut resting: World<64, 512, 64> = World::new();
+        resting
+            .add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+            .unwrap();
+        resting
+            .add(BodyDesc::dynamic(cube).position(Vec3::new(0.0, 0.5, 0.0)))
+            .unwrap();
+        resting
+            .add(
+                BodyDesc::dynamic(ball)
+                    .material(bouncy)
+                    .position(Vec3::new(3.0, 0.31, 0.0))
+                    .velocity(Vec3::new(0.0, -2.0, 0.0)),
+            )
+            .unwrap();
+        resting.step();
+        assert_eq!(scan(&mut resting), (Some(false), false, true, true));
+    }
+
     /// The speed limit: within it a vector comes back bit for bit, beyond it it is
     /// shortened to the limit in its own direction, and anything non-finite is zero.
     #[test]
