@@ -40,6 +40,19 @@ impl F4 {
         }
     }
 
+    /// Lane-wise [`scalar::min`].
+    #[inline]
+    pub fn min(self, o: F4) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([
+            scalar::min(a0, b0),
+            scalar::min(a1, b1),
+            scalar::min(a2, b2),
+            scalar::min(a3, b3),
+        ])
+    }
+
     /// Lane-wise [`scalar::max`].
     #[inline]
     pub fn max(self, o: F4) -> F4 {
@@ -442,9 +455,9 @@ mod tests {
         }
     }
 
-    /// The selects are blends of bit patterns: each lane is exactly one input's bits
-    /// (NaN payloads and the sign of zero kept), chosen as the scalar `if` chooses,
-    /// NaN compares false.
+    /// The selects (and `min`, `max`) are blends of bit patterns: each lane is exactly
+    /// one input's bits (NaN payloads and the sign of zero kept), chosen as the scalar
+    /// `if` chooses, NaN compares false.
     #[test]
     fn selects_pick_an_input_bit_for_bit_as_the_scalar_if() {
         let nan = f32::from_bits(0x7fc0_1234);
@@ -467,6 +480,7 @@ mod tests {
             let gt = x.gt_select(y, a, b);
             let eq = x.eq_select(y, a, b);
             let sel = b.select_where(mask, a);
+            let (low, high) = (x.min(y), x.max(y));
             for (l, m) in mask.into_iter().enumerate() {
                 let (xl, yl, al, bl) = (x.lane(l), y.lane(l), a.lane(l), b.lane(l));
                 let want_gt = if xl > yl { al } else { bl };
@@ -475,6 +489,11 @@ mod tests {
                 assert_eq!(gt.lane(l).to_bits(), want_gt.to_bits());
                 assert_eq!(eq.lane(l).to_bits(), want_eq.to_bits());
                 assert_eq!(sel.lane(l).to_bits(), want_sel.to_bits());
+                // min and max: the second input on ties (either zero) and NaN.
+                let want_low = if xl < yl { xl } else { yl };
+                let want_high = if xl > yl { xl } else { yl };
+                assert_eq!(low.lane(l).to_bits(), want_low.to_bits());
+                assert_eq!(high.lane(l).to_bits(), want_high.to_bits());
             }
         }
     }

@@ -378,8 +378,8 @@ impl ConvexHull {
     /// product is above `−∞`, e.g. all NaN): the same answer as one scan in index order.
     /// Two passes over [`ConvexHull::vertex_lanes`]: four running maxima (lane `k` over
     /// the vertices `k, k + 4, ...`; NaN products never taken) give the largest product
-    /// `m`; then the first group holding a product equal to `m`, recomputed to the bit,
-    /// gives the lowest index. Padding lanes repeat vertex 0, so they match `m` only after
+    /// `m`; then the products equal to `m`, recomputed to the bit, gather into one mask
+    /// whose lowest set bit is the lowest index. Padding lanes repeat vertex 0, so they match `m` only after
     /// vertex 0 itself has. No index is carried through the first pass, whose four
     /// compare chains are independent (GJK waits on every support point).
     #[inline]
@@ -389,19 +389,24 @@ impl ConvexHull {
         let mut best = F4::splat(f32::NEG_INFINITY);
         for group in groups {
             let p = group.dot(&d);
-            best = p.gt_select(best, p, best);
+            // `if p > best { p } else { best }`: NaN products never taken.
+            best = p.max(best);
         }
         let [b0, b1, b2, b3] = best.0;
         let take = |m: f32, x: f32| if x > m { x } else { m };
         let m = take(take(b0, b1), take(b2, b3));
         if m > f32::NEG_INFINITY {
+            // Every group's hits in one mask, group `g` in bits `4g..4g + 4`, so the
+            // lowest set bit is the lowest index: no branch on where the maximum lies.
+            // (Built from the last group down, a shift per group.)
             let m4 = F4::splat(m);
-            for (g, group) in groups.iter().enumerate() {
-                let hits = group.dot(&d).eq_bits(m4);
-                if hits != 0 {
-                    let i = 4 * g as u32 + hits.trailing_zeros();
-                    return (self.core_vertex(i), i);
-                }
+            let mut hits = 0u64;
+            for group in groups.iter().rev() {
+                hits = (hits << 4) | u64::from(group.dot(&d).eq_bits(m4));
+            }
+            if hits != 0 {
+                let i = hits.trailing_zeros();
+                return (self.core_vertex(i), i);
             }
         }
         (self.core_vertex(0), 0)
@@ -429,8 +434,8 @@ impl ConvexHull {
         let mut low = F4::splat(f32::INFINITY);
         for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
             let p = group.dot(&d);
-            // `p < low` as `low > p`: the same select, NaN products never taken.
-            low = low.gt_select(p, p, low);
+            // `if p < low { p } else { low }`: NaN products never taken.
+            low = p.min(low);
         }
         let [mut l0, l1, mut l2, l3] = low.0;
         take(&mut l0, l1);
@@ -495,8 +500,8 @@ impl ConvexHull {
         let mut high = F4::splat(f32::NEG_INFINITY);
         for group in self.vertex_lanes.iter().take(self.vertex_groups()) {
             let p = group.dot(&d);
-            low = low.gt_select(p, p, low);
-            high = p.gt_select(high, p, high);
+            low = p.min(low);
+            high = p.max(high);
         }
         let ([mut l0, l1, mut l2, l3], [mut h0, h1, mut h2, h3]) = (low.0, high.0);
         lower(&mut l0, l1);
@@ -2001,7 +2006,7 @@ mod tests {
     fn four_lane_support_and_min_dot_are_the_sequential_scans() {
         let mut rng = SplitMix64::new(21);
         // A cube's corners (ties along the axes and diagonals) and random clouds of
-        // every remainder mod 4.
+        // every remainder mod 4, up to the 64 vertices (16 groups) of a full hull.
         let cube: std::vec::Vec<Vec3> = (0..8)
             .map(|i| {
                 let s = |b: u32| if i & b != 0 { 1.0 } else { -1.0 };
@@ -2009,7 +2014,7 @@ mod tests {
             })
             .collect();
         let mut hulls = std::vec![ConvexHull::new(&cube).unwrap()];
-        for n in 4..40 {
+        for n in (4..40).chain(60..=MAX_HULL_VERTICES) {
             let pts: std::vec::Vec<Vec3> = (0..n).map(|_| rng.unit_vector()).collect();
             if let Ok(h) = ConvexHull::new(&pts) {
                 hulls.push(h);
@@ -2028,6 +2033,9 @@ mod tests {
             Vec3::new(f32::NEG_INFINITY, 1.0, 0.0),
             Vec3::new(f32::INFINITY, f32::INFINITY, 0.0),
         ];
+        assert!(hulls
+            .iter()
+            .any(|h| h.vertices().len() == MAX_HULL_VERTICES));
         for h in &hulls {
             for dir in axes
                 .iter()
