@@ -537,20 +537,29 @@ impl Simplex {
             }
             _ => s3d(p0, p1, p2, p3),
         };
-        *out = Simplex::default();
+        // The vertices of positive coordinate, moved down in order; the slots past them
+        // are left as they were (nothing reads a slot past `count`).
+        // (Each coordinate is stored on its own: one load of four stored one by one
+        // waits for them all to retire.)
+        out.lambdas = [0.0; 4];
+        let mut count = 0;
         for (v, &l) in self.used().iter().zip(lambdas.iter()) {
             if l > 0.0 {
-                if let Some(slot) = out.lambdas.get_mut(out.count) {
-                    *slot = l;
+                if let (Some(slot), Some(lambda)) =
+                    (out.vertices.get_mut(count), out.lambdas.get_mut(count))
+                {
+                    *slot = *v;
+                    *lambda = l;
+                    count += 1;
                 }
-                out.push(*v);
             }
         }
-        if out.count == 0 {
+        if count == 0 {
             // Only reachable with NaN coordinates: keep the first vertex.
             *out = Simplex::single(self.vertices[0]);
             return;
         }
+        out.count = count;
         out.point = point;
     }
 }
