@@ -418,7 +418,7 @@ impl SimplexVertex {
 
 /// The support point of `D = B − A` along `dir` (query frame): B's support along `dir`
 /// minus A's support along `−dir`.
-#[inline]
+#[inline(always)]
 pub(crate) fn support(pa: &Proxy, pb: &Proxy, dir: Vec3) -> SimplexVertex {
     let (b, index_b) = pb.support(dir);
     let (a, index_a) = pa.support(-dir);

@@ -242,7 +242,7 @@ impl<'s, 'a> Proxy<'s, 'a> {
     }
 
     /// Core support point along `dir` (query frame) and its vertex index.
-    #[inline]
+    #[inline(always)]
     pub fn support(&self, dir: crate::math::Vec3) -> (crate::math::Vec3, u32) {
         if self.identity {
             return core_support(self.shape, dir);

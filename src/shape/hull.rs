@@ -379,10 +379,13 @@ impl ConvexHull {
     /// Two passes over [`ConvexHull::vertex_lanes`]: four running maxima (lane `k` over
     /// the vertices `k, k + 4, ...`; NaN products never taken) give the largest product
     /// `m`; then the products equal to `m`, recomputed to the bit, gather into one mask
-    /// whose lowest set bit is the lowest index. Padding lanes repeat vertex 0, so they match `m` only after
-    /// vertex 0 itself has. No index is carried through the first pass, whose four
-    /// compare chains are independent (GJK waits on every support point).
-    #[inline]
+    /// whose lowest set bit is the lowest index. Padding lanes repeat vertex 0, so they
+    /// match `m` only after vertex 0 itself has. No index is carried through the first
+    /// pass, whose four compare chains are independent (GJK waits on every support
+    /// point). Always inlined, with `Proxy::support` and
+    /// GJK's `support`: returned from a call, the point and index came back through
+    /// memory stored in pieces and read as one, a store-forwarding stall per support.
+    #[inline(always)]
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
         let d = V4::splat(dir);
         let groups = self.vertex_lanes.get(..self.vertex_groups()).unwrap_or(&[]);
