@@ -5,8 +5,10 @@
 //! reciprocal estimates, no horizontal sums). A compiler that vectorises these loops
 //! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32) and one that does not (a
 //! Cortex-M) produce the same bits lane for lane, so the golden checksums hold across
-//! targets. Written as plain arrays, no `unsafe`; the one intrinsic is the square root
-//! on x86 ([`F4::sqrt`], `safe_arch`'s `sqrtps`: correctly rounded, the same bits).
+//! targets. Written as plain arrays, no `unsafe`; the two intrinsics, on x86, are the
+//! square root ([`F4::sqrt`], `safe_arch`'s `sqrtps`: correctly rounded, the same bits)
+//! and the equality mask ([`F4::eq_bits`], `cmpeqps` and `movmskps`: the same mask as
+//! four compares).
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
