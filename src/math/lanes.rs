@@ -42,30 +42,24 @@ impl F4 {
         }
     }
 
+    /// `f` of the two lanes `l` of `self` and `o`, in each lane.
+    #[inline(always)]
+    fn lanewise(self, o: F4, f: impl Fn(f32, f32) -> f32) -> F4 {
+        let [a0, a1, a2, a3] = self.0;
+        let [b0, b1, b2, b3] = o.0;
+        F4([f(a0, b0), f(a1, b1), f(a2, b2), f(a3, b3)])
+    }
+
     /// Lane-wise [`scalar::min`].
     #[inline]
     pub fn min(self, o: F4) -> F4 {
-        let [a0, a1, a2, a3] = self.0;
-        let [b0, b1, b2, b3] = o.0;
-        F4([
-            scalar::min(a0, b0),
-            scalar::min(a1, b1),
-            scalar::min(a2, b2),
-            scalar::min(a3, b3),
-        ])
+        self.lanewise(o, scalar::min)
     }
 
     /// Lane-wise [`scalar::max`].
     #[inline]
     pub fn max(self, o: F4) -> F4 {
-        let [a0, a1, a2, a3] = self.0;
-        let [b0, b1, b2, b3] = o.0;
-        F4([
-            scalar::max(a0, b0),
-            scalar::max(a1, b1),
-            scalar::max(a2, b2),
-            scalar::max(a3, b3),
-        ])
+        self.lanewise(o, scalar::max)
     }
 
     /// Lane-wise [`scalar::clamp`] to `[lo, hi]`.
