@@ -382,9 +382,9 @@ impl ConvexHull {
     /// whose lowest set bit is the lowest index. Padding lanes repeat vertex 0, so they
     /// match `m` only after vertex 0 itself has. No index is carried through the first
     /// pass, whose four compare chains are independent (GJK waits on every support
-    /// point). Always inlined, with `Proxy::support` and
-    /// GJK's `support`: returned from a call, the point and index came back through
-    /// memory stored in pieces and read as one, a store-forwarding stall per support.
+    /// point). Always inlined, as are `Proxy::support` and GJK's `support`: returned
+    /// from a call, the point and index came back through memory stored in pieces and
+    /// read as one, a store-forwarding stall per support.
     #[inline(always)]
     pub(crate) fn core_support(&self, dir: Vec3) -> (Vec3, u32) {
         let d = V4::splat(dir);
