@@ -147,9 +147,12 @@ pub(crate) struct ContactPoint {
 ///
 /// `repr(C)`, fields in the order the passes over every contact read them: the pair,
 /// the point count and the flags first (the solver's plan and the sleep pass read
-/// only these, one cache line of each contact), then the normal and the patch, the
-/// points last. Rust's own layout put the pair at byte 192 and the point count and
-/// flags at 306 of 312: two or three cache lines for every contact visited.
+/// only these, one cache line of each contact); then what the solver's prepare and
+/// store read (the normal, the material, the patch impulses, the points); last what
+/// only the narrow phase reads (the normal in A's frame, the pose the manifold was
+/// built at, the reach test's memory). Rust's own layout put the pair at byte 192 and
+/// the point count and flags at 306 of 312: two or three cache lines for every contact
+/// visited.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct Contact {
@@ -181,8 +184,6 @@ pub(crate) struct Contact {
     pub sat_cache: PairCache,
     /// Unit normal from A to B (world), as of this step.
     pub normal: Vec3,
-    /// The normal in A's body frame: it turns with A while the manifold is reused.
-    pub normal_local: Vec3,
     /// Combined material.
     pub material: Material,
     /// Accumulated friction impulse of the patch, one sub-step (N·s, world vector in the
@@ -190,6 +191,10 @@ pub(crate) struct Contact {
     pub friction_impulse: Vec3,
     /// Accumulated twist impulse about the normal, one sub-step (N·m·s).
     pub twist_impulse: f32,
+    /// The points.
+    pub points: [ContactPoint; 4],
+    /// The normal in A's body frame: it turns with A while the manifold is reused.
+    pub normal_local: Vec3,
     /// B's pose in A's frame when the manifold was last built.
     pub built_pose: Iso,
     /// Margin (m) the manifold was last built with; negative: never built, build now.
@@ -199,8 +204,6 @@ pub(crate) struct Contact {
     /// with B where `built_pose` puts it; 0: none. Derived state like `sat_cache` (module
     /// docs, "Parts beyond reach").
     pub apart_gap: f32,
-    /// The points.
-    pub points: [ContactPoint; 4],
 }
 
 impl Contact {
