@@ -147,7 +147,8 @@ pub(crate) struct ContactPoint {
 ///
 /// `repr(C)`, fields in the order the passes over every contact read them: the pair,
 /// the point count and the flags first (the solver's plan and the sleep pass read
-/// only these, one cache line of each contact); then what the solver's prepare and
+/// only these: one cache line of a contact for three contacts in four, whose first 24
+/// bytes do not straddle a line); then what the solver's prepare and
 /// store read (the normal, the material, the patch impulses, the points); last what
 /// only the narrow phase reads (the normal in A's frame, the pose the manifold was
 /// built at, the reach test's memory). Rust's own layout put the pair at byte 192 and
@@ -1348,8 +1349,8 @@ mod tests {
     use super::*;
 
     /// The fields every pass over the contacts reads (the pair, the point count, the
-    /// flags) lie in the first 24 bytes, so one cache line of a contact answers them
-    /// wherever the contact starts within a line; the reorder cost no byte.
+    /// flags) lie in the first 24 bytes (one cache line unless the contact starts in
+    /// the last 16 bytes of one), and the reorder cost no byte.
     #[test]
     fn the_pair_and_flags_share_the_first_bytes() {
         use core::mem::{offset_of, size_of};
