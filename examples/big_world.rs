@@ -13,8 +13,8 @@
 //! Why not `Box::new(World::new())`? Every safe way to fill a `Box` (`Box::new`,
 //! `Box::default`, `Box::write(Box::new_uninit(), ..)`, `vec![..]`, `clone`) moves a
 //! `World` value that is built on the stack first. In a debug build (opt-level 0) that
-//! costs about 3.6 times the world's size in stack (5.1 MB for a 1.4 MB
-//! `World<512, 1024>`), so this world would overflow the 8 MB main stack; optimised
+//! costs about 3.6 times the world's size in stack (5.1 MB for a `World<512, 1024>`,
+//! measured when it was 1.4 MB), so this world would overflow the 8 MB main stack; optimised
 //! builds construct mostly in place (0.4 MB of stack for the same world). See the
 //! README's "Capacity" section for the measurements and the other patterns.
 //!
@@ -24,7 +24,7 @@ use std::sync::Mutex;
 
 use carom::{BodyDesc, Shape, Vec3, World};
 
-/// 1024 bodies and 8192 contacts: about 9.4 MB, more than the main thread's 8 MB stack.
+/// 1024 bodies and 8192 contacts: about 9.7 MB, more than the main thread's 8 MB stack.
 type BigWorld = World<'static, 1024, 8192>;
 
 /// Built at compile time: no stack, no heap, no `unsafe`.

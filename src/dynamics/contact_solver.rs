@@ -19,6 +19,19 @@
 //! products `I⁻¹ (r × d)` of every row, so a row costs a few dot products and no 3×3
 //! product.
 //!
+//! # Lever arms
+//!
+//! The normal rows' arms are the anchors turned as the bodies were when the manifold was
+//! built, `r = R_built (l − c_local)` (`l` the anchor and `c_local` the centre of mass,
+//! in body axes), not as they are now: while a manifold is reused (`contact`, "Lever
+//! arms kept from the build") the rows keep one linearisation, so a leaning box's large
+//! warm-started normal impulses do not tip it further through arms that lean with it;
+//! its loaded tower stands (rapier3d keeps its recycled contacts' world arms for the
+//! same reason). A rebuild takes the bodies' rotations of that step, and a reuse needs
+//! each kept arm within the pair's slack of the body's own. The friction patch, whose
+//! centre is re-formed from the points every step, and the closing speeds restitution
+//! reads use the current arms.
+//!
 //! # Separation inside the step
 //!
 //! Each point keeps its anchors fixed in the two bodies (`l`, relative to the centre of
@@ -556,8 +569,11 @@ pub(crate) fn prepare<const N: usize>(
         // anchor away from the contact.
         let core_a = r_a - n * rho_a;
         let core_b = r_b + n * rho_b;
-        let rn_a = r_a.cross(n);
-        let rn_b = r_b.cross(n);
+        // The rows' lever arms: the anchors turned as the bodies were at the build.
+        let kept_a = Mat3::from_quat(c.built_rot_a).mul_vec(p.local_a - body_a.center_local);
+        let kept_b = Mat3::from_quat(c.built_rot_b).mul_vec(p.local_b - body_b.center_local);
+        let rn_a = kept_a.cross(n);
+        let rn_b = kept_b.cross(n);
         let in_a = i_a.mul_vec(rn_a);
         let in_b = i_b.mul_vec(rn_b);
         let normal_mass = inverse_or_zero(m_a + m_b + rn_a.dot(in_a) + rn_b.dot(in_b));

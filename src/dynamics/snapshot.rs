@@ -1,6 +1,6 @@
 //! Checksums and snapshots of the world's dynamic state.
 //!
-//! # Format (version 4)
+//! # Format (version 5)
 //! Little-endian throughout, no pointer-sized values:
 //!
 //! | bytes | field |
@@ -19,7 +19,8 @@
 //! added them; an unknown code is `Corrupt`), the step counter, every body slot
 //! (generation, and for a used slot the whole body: shape, pose, velocities, mass,
 //! material, flags, sleep timer, broad-phase box) and the contact cache with its
-//! warm-start impulses and reuse state. What a body's description determines (mass, inertia, centre of mass) is
+//! warm-start impulses and reuse state (version 5 added the bodies' rotations at each
+//! manifold's build, which the solver's lever arms keep). What a body's description determines (mass, inertia, centre of mass) is
 //! derived again on restore, exactly as `World::add` derives it, never read; everything
 //! else is bounded, so any snapshot `restore` accepts steps to a finite state. Floats are stored as their bit patterns with `-0.0` canonicalised to `+0.0`.
 //! Hull shapes are stored as a fingerprint (FNV-1a 64 of the hull's data); `restore`
@@ -45,7 +46,7 @@ use crate::shape::{
 use crate::World;
 
 /// Snapshot format version; bumped whenever the byte layout changes.
-pub const FORMAT_VERSION: u16 = 4;
+pub const FORMAT_VERSION: u16 = 5;
 
 const MAGIC: [u8; 8] = *b"CAROMSNP";
 const HEADER_LEN: usize = 8 + 2 + 1 + 1 + 12 + 4 + 8;
@@ -637,6 +638,8 @@ fn put_contact(s: &mut impl Sink, c: &Contact) {
     s.u8(c.sensor as u8);
     s.u8(c.touching as u8);
     s.iso(&c.built_pose);
+    s.quat(c.built_rot_a);
+    s.quat(c.built_rot_b);
     s.f32(c.built_margin);
     s.vec3(c.friction_impulse);
     s.f32(c.twist_impulse);
@@ -676,6 +679,8 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
     let sensor = r.bool()?;
     let touching = r.bool()?;
     let built_pose = r.iso()?;
+    let built_rot_a = r.quat()?;
+    let built_rot_b = r.quat()?;
     let built_margin = r.f32()?;
     let friction_impulse = r.vec3()?;
     let twist_impulse = r.f32()?;
@@ -699,6 +704,8 @@ fn get_contact(r: &mut Reader<'_>) -> R<Contact> {
         sensor,
         touching,
         built_pose,
+        built_rot_a,
+        built_rot_b,
         built_margin: if built_margin < 0.0 {
             -1.0
         } else {

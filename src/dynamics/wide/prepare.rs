@@ -76,6 +76,12 @@ pub(crate) struct Inputs {
     i_b: M4,
     rot_a: M4,
     rot_b: M4,
+    /// The bodies' rotations at the manifold's build and their centres of mass in their
+    /// frames: the lever arms the rows keep (`contact_solver`, "Lever arms").
+    built_a: M4,
+    built_b: M4,
+    com_a: V4,
+    com_b: V4,
     va: V4,
     wa: V4,
     vb: V4,
@@ -214,6 +220,10 @@ fn gather_lane(
     x.m_b.set(l, m_b);
     x.i_a.set(l, &i_a);
     x.i_b.set(l, &i_b);
+    x.built_a.set(l, &Mat3::from_quat(c.built_rot_a));
+    x.built_b.set(l, &Mat3::from_quat(c.built_rot_b));
+    x.com_a.set(l, body_a.center_local);
+    x.com_b.set(l, body_b.center_local);
     x.rot_a.set(l, &sa.map_or(Mat3::IDENTITY, |s| s.rot));
     x.rot_b.set(l, &sb.map_or(Mat3::IDENTITY, |s| s.rot));
     if let (Some(a), Some(b)) = (x.has_a.get_mut(l), x.has_b.get_mut(l)) {
@@ -386,8 +396,11 @@ fn prepare_rows(
         let r_b = p_b.sub(&x.center_b);
         let core_a = r_a.sub(&n_rho_a);
         let core_b = r_b.add(&n_rho_b);
-        let rn_a = r_a.cross(n);
-        let rn_b = r_b.cross(n);
+        // The rows' lever arms: the anchors turned as the bodies were at the build.
+        let kept_a = x.built_a.mul_vec(&la.sub(&x.com_a));
+        let kept_b = x.built_b.mul_vec(&lb.sub(&x.com_b));
+        let rn_a = kept_a.cross(n);
+        let rn_b = kept_b.cross(n);
         let in_a = x.i_a.mul_vec(&rn_a);
         let in_b = x.i_b.mul_vec(&rn_b);
         let k = x.m_a + x.m_b + rn_a.dot(&in_a) + rn_b.dot(&in_b);
