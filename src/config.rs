@@ -215,8 +215,8 @@ pub struct WorldConfig {
     /// 5 cm and stands, and `pyramid100` sinks 0.3 m instead of 0.67 m; 60 Hz, the cap at
     /// 4 sub-steps, rings unless a second soft iteration is paid for); 0.1 to 1000.
     pub contact_hertz: f32,
-    /// Contact damping ratio (dimensionless). Default 5 (over-damped: no bounce from the
-    /// spring; rapier and Box2D v3 use 10); 0 to 1000.
+    /// Contact damping ratio (dimensionless). Default 10 (over-damped: no bounce from the
+    /// spring; Box2D v3's and rapier's value); 0 to 1000.
     pub contact_damping_ratio: f32,
     /// Largest speed (m/s) at which the soft contact pushes overlapping bodies apart.
     /// Default 1 m/s (a third of Box2D v3's `contactPushMaxVelocity`: one relax pass per
@@ -324,7 +324,7 @@ impl WorldConfig {
         velocity_iterations: 1,
         relax_iterations: 1,
         contact_hertz: 45.0,
-        contact_damping_ratio: 5.0,
+        contact_damping_ratio: 10.0,
         max_push_speed: 1.0,
         position_iterations: 1,
         restitution_threshold: 1.0,
