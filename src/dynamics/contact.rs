@@ -1023,16 +1023,26 @@ fn placed(body: &Iso, part: Option<&Iso>) -> Iso {
 
 /// True while the lever arms the solver keeps from the manifold's build (module docs,
 /// "Lever arms kept from the build") are within `slack` (m) of the bodies' own (or
-/// there are none: no point): each
-/// body turned, since the build, by an angle `θ` with `2 sin(θ/2) R ≤ slack`, where `R`
-/// bounds its arms (its bounding radius about its origin plus its centre of mass's
-/// distance from it). Squared, without a root: `4 |Δq_xyz|² R² ≤ slack²`.
-#[inline]
+/// there are none: no point): each moving body turned, since the build, by an angle `θ`
+/// with `2 sin(θ/2) R ≤ slack`, where `R` bounds its arms (its bounding radius about
+/// its origin plus its centre of mass's offset, summed over the axes: no root). The
+/// quaternions' difference bounds the turn without a product: `|q − q_built| =
+/// 2 sin(θ/4) ≥ sin(θ/2)` for unit quaternions, so `4 |q − q_built|² R² ≤ slack²` is
+/// enough (a body whose quaternion changed sign for the same rotation is rebuilt). A
+/// static body's arms enter no row (no inverse mass or inertia, no velocity): it
+/// passes.
+#[inline(always)]
 fn arms_kept(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, slack: f32) -> bool {
     let kept = |built: Quat, body: &Body<'_>| {
-        let turn = built.conjugate() * body.pose().rotation;
-        let reach = body.bounding_radius + (body.world_center() - body.pose().position).length();
-        4.0 * turn.xyz().length_squared() * (reach * reach) <= slack * slack
+        if body.kind == BodyKind::Static {
+            return true;
+        }
+        let q = body.pose().rotation;
+        let (dx, dy, dz, dw) = (q.x - built.x, q.y - built.y, q.z - built.z, q.w - built.w);
+        let turn2 = ((dx * dx + dy * dy) + dz * dz) + dw * dw;
+        let offset = body.center_local.abs();
+        let reach = body.bounding_radius + ((offset.x + offset.y) + offset.z);
+        4.0 * turn2 * (reach * reach) <= slack * slack
     };
     // An empty manifold keeps no arms.
     c.len == 0 || (kept(c.built_rot_a, body_a) && kept(c.built_rot_b, body_b))

@@ -560,18 +560,28 @@ pub(crate) fn prepare<const N: usize>(
     let mut carried = 0.0f32;
     let mut largest = 0.0f32;
     let mut mids = [Vec3::ZERO; 4];
+    let (now_a, now_b) = (
+        Mat3::from_quat(body_a.pose().rotation),
+        Mat3::from_quat(body_b.pose().rotation),
+    );
+    // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point).
+    let n_rho_local_a = rot_a.map(|r| r.transpose_mul_vec(n) * rho_a);
+    let n_rho_local_b = rot_b.map(|r| r.transpose_mul_vec(n) * rho_b);
     for (dst, p) in k.points.iter_mut().zip(c.points()) {
-        let p_a = body_a.pose().transform_point(p.local_a);
-        let p_b = body_b.pose().transform_point(p.local_b);
-        let r_a = p_a - center_a;
-        let r_b = p_b - center_b;
+        // The anchors about the centres of mass, in body axes, and turned as now.
+        let d_a = p.local_a - body_a.center_local;
+        let d_b = p.local_b - body_b.center_local;
+        let r_a = now_a.mul_vec(d_a);
+        let r_b = now_b.mul_vec(d_b);
+        let p_a = center_a + r_a;
+        let p_b = center_b + r_b;
         // The cores' points: a sphere's is its centre, so its spin does not carry the
         // anchor away from the contact.
         let core_a = r_a - n * rho_a;
         let core_b = r_b + n * rho_b;
         // The rows' lever arms: the anchors turned as the bodies were at the build.
-        let kept_a = Mat3::from_quat(c.built_rot_a).mul_vec(p.local_a - body_a.center_local);
-        let kept_b = Mat3::from_quat(c.built_rot_b).mul_vec(p.local_b - body_b.center_local);
+        let kept_a = Mat3::from_quat(c.built_rot_a).mul_vec(d_a);
+        let kept_b = Mat3::from_quat(c.built_rot_b).mul_vec(d_b);
         let rn_a = kept_a.cross(n);
         let rn_b = kept_b.cross(n);
         let in_a = i_a.mul_vec(rn_a);
@@ -584,8 +594,8 @@ pub(crate) fn prepare<const N: usize>(
         };
         let normal_impulse = scalar::min(p.normal_impulse, normal_mass * speed_bound);
         *dst = ConstraintPoint {
-            local_a: rot_a.map_or(core_a, |r| r.transpose_mul_vec(core_a)),
-            local_b: rot_b.map_or(core_b, |r| r.transpose_mul_vec(core_b)),
+            local_a: n_rho_local_a.map_or(core_a, |m| d_a - m),
+            local_b: n_rho_local_b.map_or(core_b, |m| d_b + m),
             core_a,
             core_b,
             adjusted_separation: n.dot(center_b - center_a) - k.radius_sum,

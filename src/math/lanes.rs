@@ -12,7 +12,7 @@
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-use super::{scalar, Iso, Quat, Vec3};
+use super::{scalar, Iso, Vec3};
 
 /// Four `f32` lanes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -390,8 +390,8 @@ impl Pose4 {
     }
 
     /// Set lane `l` to the rotation `q` and the translation `position`.
-    #[inline]
-    pub fn set(&mut self, l: usize, q: Quat, position: Vec3) {
+    #[cfg(test)]
+    pub fn set(&mut self, l: usize, q: super::Quat, position: Vec3) {
         self.u.set(l, q.xyz());
         self.w.set(l, q.w);
         self.position.set(l, position);

@@ -19,7 +19,6 @@ use super::super::solver::{SolverBody, NONE};
 use super::super::support::Supports;
 use super::*;
 use crate::config::WorldConfig;
-use crate::math::lanes::Pose4;
 use crate::math::{scalar, Mat3};
 
 /// A 3×3 matrix per lane, by columns (as [`Mat3`]).
@@ -44,6 +43,32 @@ impl M4 {
             .scale(v.x)
             .add(&self.y.scale(v.y))
             .add(&self.z.scale(v.z))
+    }
+
+    /// The rotation matrices of four quaternions given as lanes `[x, y, z, w]`: per lane
+    /// exactly [`Mat3::from_quat`] (the same operations in the same order).
+    #[inline(always)]
+    fn from_quat(q: &[F4; 4]) -> M4 {
+        let [x, y, z, w] = *q;
+        let (one, two) = (F4::splat(1.0), F4::splat(2.0));
+        let (x2, y2, z2) = (x * two, y * two, z * two);
+        M4 {
+            x: V4 {
+                x: one + (y * -y2 - z * z2),
+                y: z2 * w - x * -y2,
+                z: -y2 * w + x * z2,
+            },
+            y: V4 {
+                x: -z2 * w + y * x2,
+                y: one + (z * -z2 - x * x2),
+                z: x2 * w - y * -z2,
+            },
+            z: V4 {
+                x: y2 * w - z * -x2,
+                y: -x2 * w + z * y2,
+                z: one + (x * -x2 - y * y2),
+            },
+        }
     }
 
     /// `Mᵀ v`, as [`Mat3::transpose_mul_vec`].
@@ -76,10 +101,11 @@ pub(crate) struct Inputs {
     i_b: M4,
     rot_a: M4,
     rot_b: M4,
-    /// The bodies' rotations at the manifold's build and their centres of mass in their
-    /// frames: the lever arms the rows keep (`contact_solver`, "Lever arms").
-    built_a: M4,
-    built_b: M4,
+    /// The bodies' rotations at the manifold's build (lanes of `x, y, z, w`) and their
+    /// centres of mass in their frames: the lever arms the rows keep
+    /// (`contact_solver`, "Lever arms").
+    built_a: [F4; 4],
+    built_b: [F4; 4],
     com_a: V4,
     com_b: V4,
     va: V4,
@@ -88,8 +114,9 @@ pub(crate) struct Inputs {
     wb: V4,
     center_a: V4,
     center_b: V4,
-    pose_a: Pose4,
-    pose_b: Pose4,
+    /// The bodies' rotations now (lanes of `x, y, z, w`).
+    now_a: [F4; 4],
+    now_b: [F4; 4],
     rho_a: F4,
     rho_b: F4,
     n: V4,
@@ -220,8 +247,6 @@ fn gather_lane(
     x.m_b.set(l, m_b);
     x.i_a.set(l, &i_a);
     x.i_b.set(l, &i_b);
-    x.built_a.set(l, &Mat3::from_quat(c.built_rot_a));
-    x.built_b.set(l, &Mat3::from_quat(c.built_rot_b));
     x.com_a.set(l, body_a.center_local);
     x.com_b.set(l, body_b.center_local);
     x.rot_a.set(l, &sa.map_or(Mat3::IDENTITY, |s| s.rot));
@@ -237,10 +262,16 @@ fn gather_lane(
     x.wb.set(l, wb);
     x.center_a.set(l, body_a.world_center());
     x.center_b.set(l, body_b.world_center());
-    x.pose_a
-        .set(l, body_a.pose().rotation, body_a.pose().position);
-    x.pose_b
-        .set(l, body_b.pose().rotation, body_b.pose().position);
+    for (lanes, q) in [
+        (&mut x.now_a, body_a.pose().rotation),
+        (&mut x.now_b, body_b.pose().rotation),
+        (&mut x.built_a, c.built_rot_a),
+        (&mut x.built_b, c.built_rot_b),
+    ] {
+        for (lane, v) in lanes.iter_mut().zip([q.x, q.y, q.z, q.w]) {
+            lane.set(l, v);
+        }
+    }
     x.rho_a.set(l, body_a.shape.radius());
     x.rho_b.set(l, body_b.shape.radius());
     x.n.set(l, n);
@@ -376,6 +407,11 @@ fn prepare_rows(
     let speed_bound = F4::splat(2.0 * cfg.max_linear_speed + cfg.max_push_speed);
     let adjusted = n.dot(&x.center_b.sub(&x.center_a)) - radius_sum;
     let (n_rho_a, n_rho_b) = (n.scale(x.rho_a), n.scale(x.rho_b));
+    let (now_a, now_b) = (M4::from_quat(&x.now_a), M4::from_quat(&x.now_b));
+    let (built_a, built_b) = (M4::from_quat(&x.built_a), M4::from_quat(&x.built_b));
+    // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point).
+    let n_rho_local_a = x.rot_a.transpose_mul_vec(n).scale(x.rho_a);
+    let n_rho_local_b = x.rot_b.transpose_mul_vec(n).scale(x.rho_b);
     let mut plain = V4::default();
     let mut carried = zero;
     let mut largest = zero;
@@ -390,15 +426,18 @@ fn prepare_rows(
         let (Some(la), Some(lb)) = (x.local_a.get(j), x.local_b.get(j)) else {
             break;
         };
-        let p_a = x.pose_a.transform_point(la);
-        let p_b = x.pose_b.transform_point(lb);
-        let r_a = p_a.sub(&x.center_a);
-        let r_b = p_b.sub(&x.center_b);
+        // The anchors about the centres of mass, in body axes, and turned as now.
+        let d_a = la.sub(&x.com_a);
+        let d_b = lb.sub(&x.com_b);
+        let r_a = now_a.mul_vec(&d_a);
+        let r_b = now_b.mul_vec(&d_b);
+        let p_a = x.center_a.add(&r_a);
+        let p_b = x.center_b.add(&r_b);
         let core_a = r_a.sub(&n_rho_a);
         let core_b = r_b.add(&n_rho_b);
         // The rows' lever arms: the anchors turned as the bodies were at the build.
-        let kept_a = x.built_a.mul_vec(&la.sub(&x.com_a));
-        let kept_b = x.built_b.mul_vec(&lb.sub(&x.com_b));
+        let kept_a = built_a.mul_vec(&d_a);
+        let kept_b = built_b.mul_vec(&d_b);
         let rn_a = kept_a.cross(n);
         let rn_b = kept_b.cross(n);
         let in_a = x.i_a.mul_vec(&rn_a);
@@ -411,8 +450,8 @@ fn prepare_rows(
             scalar::min(stored.lane(l), cap.lane(l))
         }));
         // A body without a solver entry keeps its world lever arm as its anchor.
-        let local_a = select_v(x.has_a, &x.rot_a.transpose_mul_vec(&core_a), &core_a);
-        let local_b = select_v(x.has_b, &x.rot_b.transpose_mul_vec(&core_b), &core_b);
+        let local_a = select_v(x.has_a, &d_a.sub(&n_rho_local_a), &core_a);
+        let local_b = select_v(x.has_b, &d_b.add(&n_rho_local_b), &core_b);
         let mid = p_a.add(&p_b).scale(F4::splat(0.5));
         plain = select_v(here, &plain.add(&mid), &plain);
         carried = carried.select_where(here, carried + impulse);
@@ -529,14 +568,15 @@ fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize) {
     if bouncy == [false; 4] {
         return;
     }
+    let (now_a, now_b) = (M4::from_quat(&x.now_a), M4::from_quat(&x.now_b));
     for j in 0..rows {
         let (Some(&here), Some(la), Some(lb)) =
             (x.point.get(j), x.local_a.get(j), x.local_b.get(j))
         else {
             break;
         };
-        let r_a = x.pose_a.transform_point(la).sub(&x.center_a);
-        let r_b = x.pose_b.transform_point(lb).sub(&x.center_b);
+        let r_a = now_a.mul_vec(&la.sub(&x.com_a));
+        let r_b = now_b.mul_vec(&lb.sub(&x.com_b));
         let closing =
             x.vb.add(&x.wb.cross(&r_b))
                 .sub(&x.va.add(&x.wa.cross(&r_a)));
