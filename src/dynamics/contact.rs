@@ -42,7 +42,9 @@
 //! ## Lever arms kept from the build
 //!
 //! A build also stores both bodies' world rotations (`built_rot_a`, `built_rot_b`), and
-//! while the manifold is reused the solver's rows keep the lever arms they had then:
+//! while the manifold is reused the solver's rows keep the lever arms they had then (a
+//! sphere pair, measured afresh every step and never reused, takes its arms as the
+//! bodies turn now):
 //! each anchor taken about its body's centre of mass and turned by the stored rotation,
 //! not by the current one (`contact_solver`, "Lever arms"). The separations still
 //! follow the bodies' motion exactly. Turning the arms with a leaning body lets the
@@ -166,11 +168,12 @@ pub(crate) struct ContactPoint {
 /// the point count and the flags first (the solver's plan and the sleep pass read
 /// only these: one cache line of a contact for three contacts in four, whose first 24
 /// bytes do not straddle a line); then what the solver's prepare and
-/// store read (the normal, the material, the patch impulses, the points, the bodies'
-/// rotations at the build); last what only the narrow phase reads (the normal in A's
-/// frame, the pose the manifold was built at, the reach test's memory). Rust's own
-/// layout had put the pair at byte 192 and the point count and flags at 306 of 312
-/// bytes: two or three cache lines for every contact visited.
+/// store read (the normal, the material, the patch impulses, the reuse margin with the
+/// reach test's memory beside it, the points, the bodies' rotations at the build, which
+/// a sphere pair's prepare does not read); last what only the narrow phase reads (the
+/// normal in A's frame, the pose the manifold was built at). Rust's own layout had put
+/// the pair at byte 192 and the point count and flags at 306 of 312 bytes: two or three
+/// cache lines for every contact visited.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C)]
 pub(crate) struct Contact {
@@ -209,11 +212,20 @@ pub(crate) struct Contact {
     pub friction_impulse: Vec3,
     /// Accumulated twist impulse about the normal, one sub-step (N·m·s).
     pub twist_impulse: f32,
+    /// Margin (m) the manifold was last built with; negative: never built, build now, and
+    /// for a sphere pair, never reused (its points are formed afresh every step, and the
+    /// solver takes their arms as the bodies turn now, not `built_rot_*`).
+    pub built_margin: f32,
+    /// The reach test's memory of this part contact: a lower bound (m) of the distance
+    /// between its triangle and the ball about B's origin (radius B's bounding radius)
+    /// with B where `built_pose` puts it; 0: none. Derived state like `sat_cache` (module
+    /// docs, "Parts beyond reach").
+    pub apart_gap: f32,
     /// The points.
     pub points: [ContactPoint; 4],
-    /// A's world rotation when the manifold was last built: while the manifold is reused,
-    /// the solver turns A's lever arms back to it (module docs, "Lever arms kept from
-    /// the build").
+    /// A's world rotation when the manifold was last built: while it is reused, the
+    /// solver turns A's lever arms back to it (module docs, "Lever arms kept from the
+    /// build").
     pub built_rot_a: Quat,
     /// B's world rotation when the manifold was last built (see `built_rot_a`).
     pub built_rot_b: Quat,
@@ -221,13 +233,6 @@ pub(crate) struct Contact {
     pub normal_local: Vec3,
     /// B's pose in A's frame when the manifold was last built.
     pub built_pose: Iso,
-    /// Margin (m) the manifold was last built with; negative: never built, build now.
-    pub built_margin: f32,
-    /// The reach test's memory of this part contact: a lower bound (m) of the distance
-    /// between its triangle and the ball about B's origin (radius B's bounding radius)
-    /// with B where `built_pose` puts it; 0: none. Derived state like `sat_cache` (module
-    /// docs, "Parts beyond reach").
-    pub apart_gap: f32,
 }
 
 impl Contact {

@@ -564,6 +564,16 @@ pub(crate) fn prepare<const N: usize>(
         Mat3::from_quat(body_a.pose().rotation),
         Mat3::from_quat(body_b.pose().rotation),
     );
+    // A manifold never reused (a sphere pair's, `built_margin` < 0) takes its arms as
+    // the bodies turn now; a built one was built at the rotations it keeps.
+    let (built_a, built_b) = if c.built_margin < 0.0 {
+        (now_a, now_b)
+    } else {
+        (
+            Mat3::from_quat(c.built_rot_a),
+            Mat3::from_quat(c.built_rot_b),
+        )
+    };
     // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point).
     let n_rho_local_a = rot_a.map(|r| r.transpose_mul_vec(n) * rho_a);
     let n_rho_local_b = rot_b.map(|r| r.transpose_mul_vec(n) * rho_b);
@@ -580,8 +590,8 @@ pub(crate) fn prepare<const N: usize>(
         let core_a = r_a - n * rho_a;
         let core_b = r_b + n * rho_b;
         // The rows' lever arms: the anchors turned as the bodies were at the build.
-        let kept_a = Mat3::from_quat(c.built_rot_a).mul_vec(d_a);
-        let kept_b = Mat3::from_quat(c.built_rot_b).mul_vec(d_b);
+        let kept_a = built_a.mul_vec(d_a);
+        let kept_b = built_b.mul_vec(d_b);
         let rn_a = kept_a.cross(n);
         let rn_b = kept_b.cross(n);
         let in_a = i_a.mul_vec(rn_a);

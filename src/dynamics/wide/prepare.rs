@@ -262,11 +262,19 @@ fn gather_lane(
     x.wb.set(l, wb);
     x.center_a.set(l, body_a.world_center());
     x.center_b.set(l, body_b.world_center());
+    // A manifold never reused (a sphere pair's, `built_margin` < 0) takes its arms as
+    // the bodies turn now; a built one was built at the rotations it keeps.
+    let (now_a, now_b) = (body_a.pose().rotation, body_b.pose().rotation);
+    let (built_a, built_b) = if c.built_margin < 0.0 {
+        (now_a, now_b)
+    } else {
+        (c.built_rot_a, c.built_rot_b)
+    };
     for (lanes, q) in [
-        (&mut x.now_a, body_a.pose().rotation),
-        (&mut x.now_b, body_b.pose().rotation),
-        (&mut x.built_a, c.built_rot_a),
-        (&mut x.built_b, c.built_rot_b),
+        (&mut x.now_a, now_a),
+        (&mut x.now_b, now_b),
+        (&mut x.built_a, built_a),
+        (&mut x.built_b, built_b),
     ] {
         for (lane, v) in lanes.iter_mut().zip([q.x, q.y, q.z, q.w]) {
             lane.set(l, v);
