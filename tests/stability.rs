@@ -107,15 +107,21 @@ fn tower(n: usize, steps: u32) -> (f32, f32) {
     })
 }
 
+/// [`tower`] of `n` boxes for 20 s: its top never farther than `sway` (m) from the axis,
+/// and finally above `height` (m).
+fn tower_stands(n: usize, sway: f32, height: f32) {
+    let (farthest, top) = tower(n, 1200);
+    eprintln!("tower of {n}: farthest {farthest} m, top at {top} m");
+    assert!(farthest < sway, "farthest {farthest}");
+    assert!(top > height, "top at {top}");
+}
+
 /// A tower of 20 unit boxes, sleeping off, stands 20 s: its top never leaves its
 /// column by 3 cm (2.1 cm here; rapier3d's sways 2.5 cm) and stays above 19.4 m (soft
 /// contacts sag: 20 contacts at 45 Hz about 5 cm, `m g / (m_eff ω²)` each).
 #[test]
 fn tower_of_twenty_boxes_stands_twenty_seconds() {
-    let (farthest, top) = tower(20, 1200);
-    eprintln!("tower of 20: farthest {farthest} m, top at {top} m");
-    assert!(farthest < 0.03, "farthest {farthest}");
-    assert!(top > 19.4, "top at {top}");
+    tower_stands(20, 0.03, 19.4);
 }
 
 /// A tower of 40 unit boxes stands 20 s: its top stays within 8 cm of its column (6.8
@@ -124,10 +130,7 @@ fn tower_of_twenty_boxes_stands_twenty_seconds() {
 /// kept from the build") a tower of 22 leaned over and fell within 20 s.
 #[test]
 fn tower_of_forty_boxes_stands_twenty_seconds() {
-    let (farthest, top) = tower(40, 1200);
-    eprintln!("tower of 40: farthest {farthest} m, top at {top} m");
-    assert!(farthest < 0.08, "farthest {farthest}");
-    assert!(top > 39.0, "top at {top}");
+    tower_stands(40, 0.08, 39.0);
 }
 
 /// A box `ratio` times as dense as five unit boxes stacked under it, run 600 steps with
