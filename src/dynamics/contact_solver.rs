@@ -525,8 +525,6 @@ pub(crate) fn prepare<const N: usize>(
         body_a.kind != BodyKind::Dynamic || body_b.kind != BodyKind::Dynamic || side.capped;
     let center_a = body_a.world_center();
     let center_b = body_b.world_center();
-    let rot_a = sa.map(|s| s.rot);
-    let rot_b = sb.map(|s| s.rot);
     let (va, wa) = sa.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
     let (vb, wb) = sb.map_or((Vec3::ZERO, Vec3::ZERO), |s| (s.v, s.w));
     let m = c.material;
@@ -575,8 +573,8 @@ pub(crate) fn prepare<const N: usize>(
         )
     };
     // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point).
-    let n_rho_local_a = rot_a.map(|r| r.transpose_mul_vec(n) * rho_a);
-    let n_rho_local_b = rot_b.map(|r| r.transpose_mul_vec(n) * rho_b);
+    let n_rho_local_a = sa.map(|_| now_a.transpose_mul_vec(n) * rho_a);
+    let n_rho_local_b = sb.map(|_| now_b.transpose_mul_vec(n) * rho_b);
     for (dst, p) in k.points.iter_mut().zip(c.points()) {
         // The anchors about the centres of mass, in body axes, and turned as now.
         let d_a = p.local_a - body_a.center_local;

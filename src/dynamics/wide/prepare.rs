@@ -99,8 +99,6 @@ pub(crate) struct Inputs {
     m_b: F4,
     i_a: M4,
     i_b: M4,
-    rot_a: M4,
-    rot_b: M4,
     /// The bodies' rotations at the manifold's build (lanes of `x, y, z, w`) and their
     /// centres of mass in their frames: the lever arms the rows keep
     /// (`contact_solver`, "Lever arms").
@@ -249,8 +247,6 @@ fn gather_lane(
     x.i_b.set(l, &i_b);
     x.com_a.set(l, body_a.center_local);
     x.com_b.set(l, body_b.center_local);
-    x.rot_a.set(l, &sa.map_or(Mat3::IDENTITY, |s| s.rot));
-    x.rot_b.set(l, &sb.map_or(Mat3::IDENTITY, |s| s.rot));
     if let (Some(a), Some(b)) = (x.has_a.get_mut(l), x.has_b.get_mut(l)) {
         (*a, *b) = (sa.is_some(), sb.is_some());
     }
@@ -417,9 +413,10 @@ fn prepare_rows(
     let (n_rho_a, n_rho_b) = (n.scale(x.rho_a), n.scale(x.rho_b));
     let (now_a, now_b) = (M4::from_quat(&x.now_a), M4::from_quat(&x.now_b));
     let (built_a, built_b) = (M4::from_quat(&x.built_a), M4::from_quat(&x.built_b));
-    // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point).
-    let n_rho_local_a = x.rot_a.transpose_mul_vec(n).scale(x.rho_a);
-    let n_rho_local_b = x.rot_b.transpose_mul_vec(n).scale(x.rho_b);
+    // A solver body's anchors are in its axes: `d − Rᵀ n ρ` (the core's point; its
+    // solver rotation is `Mat3::from_quat` of the same quaternion, `now_a`'s lane).
+    let n_rho_local_a = now_a.transpose_mul_vec(n).scale(x.rho_a);
+    let n_rho_local_b = now_b.transpose_mul_vec(n).scale(x.rho_b);
     let mut plain = V4::default();
     let mut carried = zero;
     let mut largest = zero;
@@ -486,7 +483,7 @@ fn prepare_rows(
         put(&mut p.normal_speed0, on, zero);
         put(&mut p.bounced, on, zero);
     }
-    normal_speeds(group, x, rows);
+    normal_speeds(group, x, rows, (&now_a, &now_b));
     // Point rows no lane has: empty.
     for j in rows..4 {
         let p = group.point_mut(j);
@@ -568,7 +565,8 @@ fn prepare_rows(
 /// The normal speeds `v_n` at prepare of the point rows, in the lanes with restitution
 /// (the only ones the restitution passes read; the others keep 0), as the scalar
 /// prepare forms them. A group without restitution (most) skips them.
-fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize) {
+/// `now`: the bodies' rotations, as the point rows turned the anchors.
+fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize, now: (&M4, &M4)) {
     let restitution = f4(&group.s0.s, RESTITUTION);
     let bouncy: [bool; 4] = core::array::from_fn(|l| {
         x.on.get(l).copied().unwrap_or(false) && restitution.lane(l) > 0.0
@@ -576,7 +574,7 @@ fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize) {
     if bouncy == [false; 4] {
         return;
     }
-    let (now_a, now_b) = (M4::from_quat(&x.now_a), M4::from_quat(&x.now_b));
+    let (now_a, now_b) = now;
     for j in 0..rows {
         let (Some(&here), Some(la), Some(lb)) =
             (x.point.get(j), x.local_a.get(j), x.local_b.get(j))
