@@ -288,11 +288,11 @@ pub(crate) fn finite_or_fallback(
     origin_a: Vec3,
     origin_b: Vec3,
 ) -> DistanceOutput {
-    let finite = out.distance.is_finite()
-        && out.point_a.is_finite()
-        && out.point_b.is_finite()
-        && out.normal.is_finite();
-    if finite {
+    // `0 x` is ±0 for a finite `x` and NaN for an infinity or a NaN, and a NaN carries
+    // through the sum: one compare for all ten numbers.
+    let zero = |p: Vec3| (p.x * 0.0 + p.y * 0.0) + p.z * 0.0;
+    let all = out.distance * 0.0 + zero(out.point_a) + zero(out.point_b);
+    if all + zero(out.normal) == 0.0 {
         return out;
     }
     let or_zero = |p: Vec3| if p.is_finite() { p } else { Vec3::ZERO };
@@ -1023,23 +1023,31 @@ pub(crate) fn gjk_cores(
         core::mem::swap(&mut simplex, &mut next);
         v = v_next;
     }
-    let mut simplex = *simplex;
-    match stop {
-        Some(Stop::Separated) => status = GjkStatus::Separated,
-        Some(Stop::Overlapping) => status = GjkStatus::Overlapping,
+    // The final simplex is read where it is (no copy) unless f64 refines it.
+    let refined;
+    let simplex: &Simplex = match stop {
+        Some(Stop::Separated) => {
+            status = GjkStatus::Separated;
+            simplex
+        }
+        Some(Stop::Overlapping) => {
+            status = GjkStatus::Overlapping;
+            simplex
+        }
         Some(Stop::Undecided) => {
             // At most `max_iterations` more supports, in f64.
-            (simplex, status) = gjk_f64::refine(pa, pb, &simplex, size2, max_iterations);
-            v = simplex.closest();
+            (refined, status) = gjk_f64::refine(pa, pb, simplex, size2, max_iterations);
+            v = refined.closest();
+            &refined
         }
-        None => {}
-    }
+        None => simplex,
+    };
     if status == GjkStatus::IterationLimit
         && (simplex.count == 4 || touches_origin(v, simplex.count, size2))
     {
         status = GjkStatus::Overlapping;
     }
-    write_cache(&simplex, cache);
+    write_cache(simplex, cache);
     core_distance(pa, pb, simplex, status, iterations, size2)
 }
 
@@ -1047,7 +1055,7 @@ pub(crate) fn gjk_cores(
 fn core_distance(
     pa: &Proxy,
     pb: &Proxy,
-    simplex: Simplex,
+    simplex: &Simplex,
     status: GjkStatus,
     iterations: u32,
     size2: f32,
@@ -1063,7 +1071,7 @@ fn core_distance(
             normal: c.normalize_or(Vec3::Y),
             iterations,
             status,
-            simplex,
+            simplex: *simplex,
             ambiguous: false,
         }
     } else {
@@ -1075,7 +1083,7 @@ fn core_distance(
             normal,
             iterations,
             status,
-            simplex,
+            simplex: *simplex,
             ambiguous: direction_is_ambiguous(v, simplex.count, size2),
         }
     }
@@ -1100,7 +1108,7 @@ pub(crate) fn refined_near(pa: &Proxy, pb: &Proxy, core: &CoreDistance) -> Optio
     Some(core_distance(
         pa,
         pb,
-        simplex,
+        &simplex,
         status,
         core.iterations,
         size2,
@@ -1278,6 +1286,45 @@ mod tests {
             assert!(capped.distance >= full.distance - 1e-5);
             if capped.status != GjkStatus::IterationLimit {
                 assert!((capped.distance - full.distance).abs() < 1e-4);
+            }
+        }
+    }
+
+    /// An answer whose ten numbers are finite comes back as it is, whatever their size;
+    /// one infinity or NaN in any of them sends it down the fallback, which answers with
+    /// finite numbers and [`GjkStatus::IterationLimit`].
+    #[test]
+    fn finite_answers_pass_and_any_non_finite_number_falls_back() {
+        let good = DistanceOutput {
+            distance: f32::MAX,
+            point_a: Vec3::new(-f32::MAX, 1.0e-45, -0.0),
+            point_b: Vec3::new(3.0, f32::MIN_POSITIVE, -7.5),
+            normal: Vec3::Y,
+            iterations: 4,
+            status: GjkStatus::Separated,
+        };
+        assert_eq!(finite_or_fallback(good, Vec3::X, Vec3::Z), good);
+        for field in 0..10 {
+            for bad in [f32::INFINITY, f32::NEG_INFINITY, f32::NAN] {
+                let mut out = good;
+                let slot = match field {
+                    0 => &mut out.distance,
+                    1 => &mut out.point_a.x,
+                    2 => &mut out.point_a.y,
+                    3 => &mut out.point_a.z,
+                    4 => &mut out.point_b.x,
+                    5 => &mut out.point_b.y,
+                    6 => &mut out.point_b.z,
+                    7 => &mut out.normal.x,
+                    8 => &mut out.normal.y,
+                    _ => &mut out.normal.z,
+                };
+                *slot = bad;
+                let fixed = finite_or_fallback(out, Vec3::X, Vec3::Z);
+                assert_eq!(fixed.status, GjkStatus::IterationLimit, "{field} {bad}");
+                assert!(fixed.distance.is_finite() && fixed.distance >= 0.0);
+                assert!(fixed.point_a.is_finite() && fixed.point_b.is_finite());
+                assert!((fixed.normal.length() - 1.0).abs() < 1e-6, "{field} {bad}");
             }
         }
     }
