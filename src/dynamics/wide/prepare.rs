@@ -345,49 +345,67 @@ fn select_v(mask: [bool; 4], a: &V4, b: &V4) -> V4 {
     }
 }
 
+/// A lane mask with its "all four" test made once: the writes and keeps below take a
+/// plain copy for a full mask (most groups' and points') and a blend otherwise.
+#[derive(Clone, Copy)]
+struct Mask {
+    lanes: [bool; 4],
+    all: bool,
+}
+
+impl Mask {
+    #[inline]
+    fn of(lanes: [bool; 4]) -> Mask {
+        Mask {
+            lanes,
+            all: lanes == ALL_LANES,
+        }
+    }
+}
+
 /// Write `v` into the lanes of `dst` where `on` (all four: a plain copy).
 #[inline]
-fn put(dst: &mut F4, on: [bool; 4], v: F4) {
-    *dst = if on == ALL_LANES {
+fn put(dst: &mut F4, on: Mask, v: F4) {
+    *dst = if on.all {
         v
     } else {
-        dst.select_where(on, v)
+        dst.select_where(on.lanes, v)
     };
 }
 
 /// Write `v` into the lanes of `dst` where `on`.
 #[inline]
-fn put_v(dst: &mut V4, on: [bool; 4], v: &V4) {
-    *dst = if on == ALL_LANES {
+fn put_v(dst: &mut V4, on: Mask, v: &V4) {
+    *dst = if on.all {
         *v
     } else {
-        select_v(on, v, dst)
+        select_v(on.lanes, v, dst)
     };
 }
 
 /// `v` where `on`, zero elsewhere.
 #[inline]
-fn keep(on: [bool; 4], v: F4) -> F4 {
-    if on == ALL_LANES {
+fn keep(on: Mask, v: F4) -> F4 {
+    if on.all {
         v
     } else {
-        F4::ZERO.select_where(on, v)
+        F4::ZERO.select_where(on.lanes, v)
     }
 }
 
 /// `v` where `on`, zero elsewhere.
 #[inline]
-fn keep_v(on: [bool; 4], v: &V4) -> V4 {
-    if on == ALL_LANES {
+fn keep_v(on: Mask, v: &V4) -> V4 {
+    if on.all {
         *v
     } else {
-        select_v(on, v, &V4::default())
+        select_v(on.lanes, v, &V4::default())
     }
 }
 
 /// Write `v` into the lanes of quarter entry `at..at + 3` where `on`.
 #[inline(always)]
-fn put_q(q: &mut [F4; QUARTER], at: usize, on: [bool; 4], v: &V4) {
+fn put_q(q: &mut [F4; QUARTER], at: usize, on: Mask, v: &V4) {
     for (i, c) in [v.x, v.y, v.z].into_iter().enumerate() {
         if let Some(d) = q.get_mut(at + i) {
             put(d, on, c);
@@ -404,7 +422,7 @@ fn prepare_rows(
     contacts: &[Contact],
     cfg: &WorldConfig,
 ) {
-    let on = x.on;
+    let on = Mask::of(x.on);
     let zero = F4::ZERO;
     let n = &x.n;
     let radius_sum = x.rho_a + x.rho_b;
@@ -425,9 +443,10 @@ fn prepare_rows(
     // The point rows some lane has (a group of spheres has one).
     let rows = usize::from(x.len.iter().copied().max().unwrap_or(0)).min(4);
     for j in 0..rows {
-        let Some(&here) = x.point.get(j) else {
+        let Some(&point) = x.point.get(j) else {
             break;
         };
+        let here = Mask::of(point);
         let (Some(la), Some(lb)) = (x.local_a.get(j), x.local_b.get(j)) else {
             break;
         };
@@ -458,9 +477,9 @@ fn prepare_rows(
         let local_a = select_v(x.has_a, &d_a.sub(&n_rho_local_a), &core_a);
         let local_b = select_v(x.has_b, &d_b.add(&n_rho_local_b), &core_b);
         let mid = p_a.add(&p_b).scale(F4::splat(0.5));
-        plain = select_v(here, &plain.add(&mid), &plain);
-        carried = carried.select_where(here, carried + impulse);
-        largest = largest.select_where(here, largest.max(impulse));
+        plain = select_v(point, &plain.add(&mid), &plain);
+        carried = carried.select_where(point, carried + impulse);
+        largest = largest.select_where(point, largest.max(impulse));
         if let (Some(m), Some(i)) = (mids.get_mut(j), impulses.get_mut(j)) {
             *m = mid;
             *i = impulse;
@@ -535,7 +554,7 @@ fn prepare_rows(
             break;
         };
         let d = mid.sub(&center);
-        let arm = keep(here, d.dot(&d).sqrt());
+        let arm = keep(Mask::of(here), d.dot(&d).sqrt());
         if let Some(a) = arms.get_mut(j) {
             *a = arm;
         }
@@ -552,7 +571,7 @@ fn prepare_rows(
             | if free { TORQUE_FREE } else { 0 }
     });
     for (l, f) in flags.iter().enumerate() {
-        if on.get(l).copied().unwrap_or(false) {
+        if on.lanes.get(l).copied().unwrap_or(false) {
             if let Some(v) = group.s3.idx.get_mut(l) {
                 // The sticking bit was set by the patch.
                 *v = (*v & STICKING) | f;
@@ -586,7 +605,7 @@ fn normal_speeds(group: &mut Group<'_>, x: &Inputs, rows: usize, now: (&M4, &M4)
         let closing =
             x.vb.add(&x.wb.cross(&r_b))
                 .sub(&x.va.add(&x.wa.cross(&r_a)));
-        let vn = keep(here, closing.dot(&x.n));
+        let vn = keep(Mask::of(here), closing.dot(&x.n));
         let p = group.point_mut(j);
         p.normal_speed0 = p.normal_speed0.select_where(bouncy, vn);
     }
@@ -606,7 +625,7 @@ fn prepare_patch(
     contacts: &[Contact],
     cfg: &WorldConfig,
 ) {
-    let on = x.on;
+    let on = Mask::of(x.on);
     let rt_a = [r_a.cross(&x.t1), r_a.cross(&x.t2)];
     let rt_b = [r_b.cross(&x.t1), r_b.cross(&x.t2)];
     let it_a = [x.i_a.mul_vec(&rt_a[0]), x.i_a.mul_vec(&rt_a[1])];
@@ -647,7 +666,7 @@ fn prepare_patch(
         }
     }
     for l in 0..4 {
-        if !on.get(l).copied().unwrap_or(false) {
+        if !on.lanes.get(l).copied().unwrap_or(false) {
             continue;
         }
         let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
@@ -691,11 +710,11 @@ fn prepare_angular_rows(
     contacts: &[Contact],
     radius_sum: F4,
 ) {
-    let on = x.on;
+    let on = Mask::of(x.on);
     let mut rolling = F4::ZERO;
     let mut twist = F4::ZERO;
     for l in 0..4 {
-        if !on.get(l).copied().unwrap_or(false) {
+        if !on.lanes.get(l).copied().unwrap_or(false) {
             continue;
         }
         let Some(c) = lanes.get(l).and_then(|&ci| contacts.get(ci as usize)) else {
@@ -745,8 +764,8 @@ fn prepare_angular_rows(
     let axes = [x.t1, x.t2, x.n];
     let zero_v = V4::default();
     for (i, d) in axes.iter().enumerate() {
-        let wanted = if i == 2 { ALL_LANES } else { rolls };
-        let (ia, ib, mass) = if wanted == [false; 4] {
+        let wanted = Mask::of(if i == 2 { ALL_LANES } else { rolls });
+        let (ia, ib, mass) = if wanted.lanes == [false; 4] {
             // No lane rolls: the tangent rows are empty.
             (zero_v, zero_v, F4::ZERO)
         } else {
