@@ -262,7 +262,7 @@ struct MovingPair<'q, 's> {
     motion_a: &'q Motion,
     b: &'q Shape<'s>,
     motion_b: &'q Motion,
-    /// `ρ_a`, `ρ_b`: core reach of each shape (m), see [`core_reach`].
+    /// `ρ_a`, `ρ_b`: core reach of each shape (m), see [`Shape::core_reach`].
     reach_a: f32,
     reach_b: f32,
     cache: SimplexCache,
@@ -430,15 +430,8 @@ fn closing(speed: f32) -> bool {
     speed > 0.0
 }
 
-/// Largest distance from the local origin to a point of the shape's core (m): how far a
-/// rotation about the origin can move a supporting point, per radian. The inflating radius
-/// is rotation invariant, so a sphere has reach 0.
-fn core_reach(shape: &Shape) -> f32 {
-    scalar::max(shape.bounding_radius() - shape.radius(), 0.0)
-}
-
 /// `ρ`: the largest distance of a core point from the spin axis through the shape's local
-/// origin (m), for the closing-speed bound (module docs); at most [`core_reach`].
+/// origin (m), for the closing-speed bound (module docs); at most [`Shape::core_reach`].
 ///
 /// A core point at `r` from the origin moves along a unit normal `n` at
 /// `n·(ω × r) <= |n × ω| |r⊥|`, with `r⊥` its part across the axis `ω̂` (`ω × r` is
@@ -449,7 +442,7 @@ fn core_reach(shape: &Shape) -> f32 {
 /// its length, a capsule about its axis get the small reach of their cross-section
 /// instead of their length. A slack of `1e-6` of the reach covers rounding of the axis.
 fn spin_reach(shape: &Shape, motion: &Motion) -> f32 {
-    let reach = core_reach(shape);
+    let reach = shape.core_reach();
     let spin = motion.angular.length();
     let Some(count) = shape.core_vertex_count() else {
         return reach;
@@ -507,7 +500,7 @@ pub fn movement_bounds(shape: &Shape, motion: &Motion, dt: f32) -> Aabb {
     }
     // Bound 2: end boxes grown by the rotational bulge ρ W² / 7.
     let w = motion.angular.length() * scalar::abs(dt);
-    let bulge = core_reach(shape) * w * w * (1.0 / 7.0);
+    let bulge = shape.core_reach() * w * w * (1.0 / 7.0);
     let swept_ends = shape
         .aabb(&pose_0)
         .union(&shape.aabb(&pose_1))

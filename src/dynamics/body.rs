@@ -568,6 +568,12 @@ impl<'a> Body<'a> {
         self.kind == BodyKind::Dynamic
     }
 
+    /// [`Shape::core_reach`] from the kept bounding radius (a cuboid's is a square root).
+    #[inline]
+    pub fn core_reach(&self) -> f32 {
+        crate::shape::core_reach_within(self.bounding_radius, self.shape.radius())
+    }
+
     /// Centre of mass in the world (m).
     #[inline]
     pub fn world_center(&self) -> Vec3 {

@@ -455,7 +455,13 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
         body.refresh_bounds_from(now);
         // Most bodies stay well inside their enlarged box: a cheap cover of the movement
         // bounds settles it (the same answer: the bounds lie inside the cover).
-        let cover = movement_cover(body.bounding_radius, &motion, now, cfg.dt);
+        let cover = movement_cover(
+            body.bounding_radius,
+            body.core_reach(),
+            &motion,
+            now,
+            cfg.dt,
+        );
         if body.fat.contains(&grown(cover)) {
             continue;
         }
@@ -536,18 +542,19 @@ fn body_motion(body: &Body<'_>, cfg: &WorldConfig) -> (Motion, Option<f32>) {
 }
 
 /// A box that holds [`movement_bounds`]`(shape, motion, dt)` of a shape of bounding
-/// radius `r` (`Shape::bounding_radius`), for about a tenth of its cost (no rotation is
-/// integrated; `now` is the shape's box at `motion.pose`): that box and the same box
-/// moved by `v dt`, grown by how far a turn of `W = |ω| dt` moves a point within `r` of
-/// the origin (a chord, at most `r W`), by the bulge the bounds allow (`r W² / 7`) and by
-/// a rounding guard ten times theirs.
-fn movement_cover(r: f32, motion: &Motion, now: Aabb, dt: f32) -> Aabb {
+/// radius `r` (`Shape::bounding_radius`) and core reach `rho` (`Shape::core_reach`), for
+/// about a tenth of its cost (no rotation is integrated; `now` is the shape's box at
+/// `motion.pose`): that box and the same box moved by `v dt`, grown by how far a turn of
+/// `W = |ω| dt` moves a point of the shape (its core's points, within `rho` of the
+/// origin: a chord, at most `rho W`; the inflating radius turns onto itself), by the
+/// bulge the bounds allow (`rho W² / 7`) and by a rounding guard ten times theirs.
+fn movement_cover(r: f32, rho: f32, motion: &Motion, now: Aabb, dt: f32) -> Aabb {
     let shift = motion.linear * dt;
     let w = motion.angular.length() * scalar::abs(dt);
     let c0 = motion.pose.position;
     let guard = COVER_ROUNDING * (r + c0.abs().max_elem() + (c0 + shift).abs().max_elem());
     now.union(&now.translated(shift))
-        .expanded(r * w * (1.0 + w * (1.0 / 7.0)) + guard)
+        .expanded(rho * w * (1.0 + w * (1.0 / 7.0)) + guard)
 }
 
 /// Relative rounding guard of [`movement_cover`] (ten times the movement bounds').
@@ -961,6 +968,7 @@ mod tests {
             let exact = movement_bounds(&shape, &motion, dt);
             let cover = movement_cover(
                 shape.bounding_radius(),
+                shape.core_reach(),
                 &motion,
                 shape.aabb(&motion.pose),
                 dt,

@@ -40,10 +40,10 @@
 //!   a fast body that slides along the ground.
 //! - A hit counts only when the motion left after it would carry the bodies more than
 //!   `slop` deeper along the hit normal: `((v_a − v_b)·n + |ω_a| ρ_a + |ω_b| ρ_b)(h − t)`,
-//!   with `ρ` the reach of a shape's core ([`Shape::bounding_radius`] less its radius).
-//!   Shallower is what the discrete contact tolerates anyway, and it is what a fast body
-//!   sliding along the ground does (gravity adds `g h²`, 2.7 mm at 60 Hz, per step):
-//!   pausing it at every such graze would stall it. This filter is a departure from
+//!   with `ρ` the reach of a shape's core (`Shape::core_reach`: its bounding radius less
+//!   its radius). Shallower is what the discrete contact tolerates anyway, and it is what
+//!   a fast body sliding along the ground does (gravity adds `g h²`, 2.7 mm at 60 Hz, per
+//!   step): pausing it at every such graze would stall it. This filter is a departure from
 //!   "the earliest hit", after Box2D v3's `b2ContinuousQueryCallback`, which also
 //!   refuses hits that do not threaten to tunnel.
 //!
@@ -67,7 +67,6 @@ use super::solver::is_active;
 use crate::collide::{time_of_impact_unchecked, Motion, Toi};
 use crate::config::WorldConfig;
 use crate::math::{scalar, Iso, Vec3};
-use crate::shape::Shape;
 
 /// Smallest sweep tolerance (m), for a world configured with a zero slop: the time of
 /// impact needs a positive one.
@@ -218,12 +217,6 @@ fn fast_motion(b: &Body<'_>, cfg: &WorldConfig, h: f32) -> Option<Motion> {
     }
 }
 
-/// Largest distance a turn moves a point of the shape, per radian (m): the reach of its
-/// core (the inflating radius turns onto itself).
-fn core_reach(shape: &Shape<'_>) -> f32 {
-    scalar::max(shape.bounding_radius() - shape.radius(), 0.0)
-}
-
 /// The earliest hit of the fast body in slot `i` that counts (module docs): its time and
 /// the other body's slot. Adds the time-of-impact queries it runs to `queries`.
 #[allow(clippy::too_many_arguments)]
@@ -272,8 +265,8 @@ fn earliest_hit<const N: usize>(
         // How much deeper the rest of the motion would take the bodies along the normal.
         let deeper = normal.is_none_or(|n| {
             let closing = (motion.linear - other_motion.linear).dot(n)
-                + motion.angular.length() * core_reach(&fast.shape)
-                + other_motion.angular.length() * core_reach(&o.shape);
+                + motion.angular.length() * fast.shape.core_reach()
+                + other_motion.angular.length() * o.shape.core_reach();
             closing * (h - time) > cfg.slop
         });
         if deeper {

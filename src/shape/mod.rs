@@ -473,6 +473,14 @@ impl<'a> Shape<'a> {
         }
     }
 
+    /// Largest distance from the local origin to a point of the core (m): how far a turn
+    /// about the origin moves a point of the shape, per radian. The inflating radius turns
+    /// onto itself, so a ball has reach 0 and a capsule its half-height.
+    #[inline]
+    pub(crate) fn core_reach(&self) -> f32 {
+        core_reach_within(self.bounding_radius(), self.radius())
+    }
+
     /// The core's furthest point along `dir` (local frame) and its vertex index.
     /// A half-space has no support point; it answers with the origin.
     #[inline]
@@ -701,4 +709,10 @@ fn field_support(f: &HeightField<'_>, dir: Vec3) -> (Vec3, u32) {
         }
     }
     best
+}
+
+/// [`Shape::core_reach`] from a shape's bounding radius and inflating radius (m).
+#[inline]
+pub(crate) fn core_reach_within(bounding_radius: f32, radius: f32) -> f32 {
+    crate::math::scalar::max(bounding_radius - radius, 0.0)
 }
