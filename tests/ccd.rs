@@ -216,6 +216,32 @@ fn slow_bodies_are_not_swept() {
     }
 }
 
+/// Spin alone makes a body fast only by what its core sweeps: a ball spinning in place at
+/// the speed limit, 100 rad/s (its surface at 10 m/s, 17 cm per step, most of its
+/// diameter), moves no point of its core and is never swept, while a capsule of the same
+/// radius spinning as fast about its middle sweeps its segment's ends 0.8 m per step and is
+/// swept every step.
+#[test]
+fn a_spinning_ball_is_not_swept_and_a_spinning_capsule_is() {
+    for (shape, swept) in [
+        (Shape::sphere(0.1).unwrap(), false),
+        (Shape::capsule(0.5, 0.1).unwrap(), true),
+    ] {
+        let mut w: World<8, 16> = World::with_config(no_gravity()).unwrap();
+        // A neighbour a metre away, so the spinning body has a partner to be swept against.
+        w.add(BodyDesc::fixed(Shape::sphere(0.1).unwrap()).position(Vec3::new(0.0, 0.0, 1.0)))
+            .unwrap();
+        let h = w
+            .add(BodyDesc::dynamic(shape).angular_velocity(Vec3::new(0.0, 100.0, 0.0)))
+            .unwrap();
+        for step in 0..30 {
+            let sweeps = w.step().ccd_sweeps;
+            assert_eq!(sweeps > 0, swept, "{shape:?} step {step}: {sweeps} sweeps");
+        }
+        assert!(w.body(h).unwrap().angular_velocity().y > 99.0);
+    }
+}
+
 /// A fast box falling onto a height field is swept once against each triangle near its
 /// path per step: the step's time-of-impact queries are exactly the triangles that the
 /// field's own box query finds around the path (a brute-force count over the public

@@ -4,11 +4,11 @@
 //! and awake, and its sweep this step,
 //!
 //! ```text
-//! |x₁ − x₀| + |ω| h R            (m; x the body origin, R its bounding radius)
+//! |x₁ − x₀| + |ω| h ρ            (m; x the body origin, ρ its core's reach from it)
 //! ```
 //!
 //! exceeds `ccd_motion_fraction · min_extent`: it may have jumped over something thinner
-//! than itself. Fast bodies are taken in slot order. Each is swept from its pose at the
+//! than itself (a ball that only spins jumps over nothing: its core is its centre). Fast bodies are taken in slot order. Each is swept from its pose at the
 //! start of the step (`pose0`) to its pose now with [`time_of_impact_unchecked`]
 //! against every other body it has a contact with, each body once (a pair with a mesh
 //! or compound holds a record and a contact per part pair; its parts are swept once for
@@ -209,7 +209,7 @@ fn fast_motion(b: &Body<'_>, cfg: &WorldConfig, h: f32) -> Option<Motion> {
         return None;
     }
     let sweep = (b.pose().position - b.pose0.position).length()
-        + b.angular_velocity.length() * h * b.bounding_radius;
+        + b.angular_velocity.length() * h * b.core_reach();
     if sweep > cfg.ccd_motion_fraction * b.shape.min_extent() {
         Some(motion_of(b, h))
     } else {
