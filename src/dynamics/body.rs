@@ -341,6 +341,11 @@ pub(crate) struct Body<'a> {
     /// body in every step (a cuboid's is a square root, a hull's a load through its
     /// reference).
     pub bounding_radius: f32,
+    /// How far (m) the core of the shape reaches from the centre of mass, at most: the
+    /// core's reach from the origin ([`Body::core_reach`]) plus the centre of mass's L1
+    /// distance from it. Formed once, as `bounding_radius` (the shape and the centre of
+    /// mass never change): every pair's closing bound reads it in every step.
+    pub turn_reach: f32,
     pub kind: BodyKind,
     /// Pose of the body frame (the shape's frame) in the world: read through
     /// [`Body::pose`], changed only through [`Body::place`] (which keeps `center_world`).
@@ -482,9 +487,13 @@ impl<'a> Body<'a> {
         let rotation = d.pose.rotation.normalize();
         let pose = Iso::new(d.pose.position, rotation);
         let still = d.kind == BodyKind::Static;
+        let bounding_radius = d.shape.bounding_radius();
+        let c = center_local.abs();
         let mut b = Body {
             shape: d.shape,
-            bounding_radius: d.shape.bounding_radius(),
+            bounding_radius,
+            turn_reach: crate::shape::core_reach_within(bounding_radius, d.shape.radius())
+                + ((c.x + c.y) + c.z),
             kind: d.kind,
             pose,
             center_local,

@@ -692,23 +692,13 @@ fn update_one<const N: usize>(
 
 /// The fastest the surfaces of `a` and `b` can close (m/s): `|v_b − v_a| + |ω_a| ρ_a +
 /// |ω_b| ρ_b`, with `ρ` how far a body's core reaches from its centre of mass
-/// ([`turn_reach`]).
+/// (`Body::turn_reach`). Turning about the centre of mass moves no surface point faster
+/// than `|ω| ρ`: a ball turning about its centre closes on nothing.
 #[inline]
 fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
     (b.linear_velocity - a.linear_velocity).length()
-        + a.angular_velocity.length() * turn_reach(a)
-        + b.angular_velocity.length() * turn_reach(b)
-}
-
-/// How far (m) the core of `b`'s shape reaches from its centre of mass, at most: the
-/// core's reach from the body origin ([`Body::core_reach`]) plus the centre of mass's
-/// distance from the origin (its L1 norm, a bound without a square root). Turning about
-/// the centre of mass moves no surface point faster than `|ω| ρ`: a ball turning about
-/// its centre closes on nothing.
-#[inline]
-fn turn_reach(b: &Body<'_>) -> f32 {
-    let c = b.center_local.abs();
-    b.core_reach() + ((c.x + c.y) + c.z)
+        + a.angular_velocity.length() * a.turn_reach
+        + b.angular_velocity.length() * b.turn_reach
 }
 
 /// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
