@@ -24,7 +24,7 @@ use std::sync::Mutex;
 
 use carom::{BodyDesc, Shape, Vec3, World};
 
-/// 1024 bodies and 8192 contacts: about 9.7 MB, more than the main thread's 8 MB stack.
+/// 1024 bodies and 8192 contacts: about 9.8 MB, more than the main thread's 8 MB stack.
 type BigWorld = World<'static, 1024, 8192>;
 
 /// Built at compile time: no stack, no heap, no `unsafe`.

@@ -127,6 +127,8 @@ pub(crate) struct Solver<const N: usize, const C: usize> {
     /// The plan's scratch by contact index: the slot (colour and point class) of a
     /// contact that stays in its colour, or [`NO_SLOT`] (`place_in_colour_order`).
     pub slot_of: [u8; C],
+    /// The plan's scratch for the visit order's radix sort (`sort::sort_pairs_radix`).
+    pub radix: [(u32, u32); C],
 }
 
 impl<const N: usize, const C: usize> Solver<N, C> {
@@ -139,6 +141,7 @@ impl<const N: usize, const C: usize> Solver<N, C> {
             heavy: false,
             marks: [0; N],
             slot_of: [NO_SLOT; C],
+            radix: [(0, 0); C],
         }
     }
 
@@ -261,8 +264,8 @@ fn plan<const N: usize, const C: usize>(
         // Cannot fail: one entry per contact at most.
         let _ = scratch.push((key, i as u32));
     }
-    // Unique second components: an unstable sort is deterministic.
-    crate::sort::sort_pairs(scratch);
+    // Pushed in contact order: a stable sort by the key gives the (key, contact) order.
+    crate::sort::sort_pairs_radix(scratch, &mut solver.radix);
     // Which islands the ground holds up, where a body may rest on one far lighter.
     solver.heavy = heavy;
     if heavy {
