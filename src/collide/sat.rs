@@ -289,6 +289,11 @@ pub(crate) trait Polytope {
     fn edge(&self, e: usize) -> Option<PolyEdge>;
     /// The faces of edge `e` (along `p0 → p1`, along `p1 → p0`), `None` past the last.
     fn edge_faces(&self, e: usize) -> Option<(usize, usize)>;
+    /// True when edge `e` has the same end points as edge `e − 1` (and so the same
+    /// vector), bit for bit: a triangle's edge `2i + 1`, the back half of edge `2i`.
+    fn repeats_previous_edge(&self, _e: usize) -> bool {
+        false
+    }
     /// Its faces as polygons: `Face<4>` for a box, a full [`Face`] for the rest.
     type FacePolygon: Polygon;
     /// Face `f` as a polygon with feature ids.
@@ -672,6 +677,10 @@ impl Polytope for TrianglePolytope {
             n0,
             n1,
         })
+    }
+
+    fn repeats_previous_edge(&self, e: usize) -> bool {
+        e & 1 == 1
     }
 
     fn edge_faces(&self, e: usize) -> Option<(usize, usize)> {
@@ -1094,6 +1103,10 @@ fn query_with<A: Polytope, B: Polytope>(
         *slot = e.faces;
     }
     let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
+    // The A edge whose products `dots` and passing pairs `passing[..count]` are: an edge
+    // with the same vector (a triangle's two halves of one edge) reads them as they are.
+    let mut dots_of: Option<usize> = None;
+    let mut count = 0usize;
     for ia in 0..a.edge_count() {
         let quick = match a.edge_faces(ia) {
             Some((f0, f1)) if prune_a => {
@@ -1111,17 +1124,21 @@ fn query_with<A: Polytope, B: Polytope>(
             continue;
         }
         let arc = ArcA::new(ea, fr);
-        b.normal_dots(arc.vector_b, dots.get_mut(..faces_b).unwrap_or(&mut []));
-        let mut count = 0usize;
-        for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
-            let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
-            let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
-            let straddles = cba * dba < 0.0; // false for NaN too
-            if let Some(slot) = passing.get_mut(count & 0xff) {
-                *slot = k as u8;
+        let twin = a.repeats_previous_edge(ia) && dots_of.is_some_and(|d| d + 1 == ia);
+        if !twin {
+            b.normal_dots(arc.vector_b, dots.get_mut(..faces_b).unwrap_or(&mut []));
+            count = 0;
+            for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
+                let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
+                let dba = dots.get(f1 as usize).copied().unwrap_or(0.0);
+                let straddles = cba * dba < 0.0; // false for NaN too
+                if let Some(slot) = passing.get_mut(count & 0xff) {
+                    *slot = k as u8;
+                }
+                count += straddles as usize;
             }
-            count += straddles as usize;
         }
+        dots_of = Some(ia);
         for &k in passing.iter().take(count) {
             let Some(eb) = edges_b.get(k as usize) else {
                 continue;
