@@ -629,8 +629,15 @@ impl<'a> Body<'a> {
 
     /// Move the body so its centre of mass is at `c` with rotation `q` (projection, CCD).
     pub fn set_center_pose(&mut self, c: Vec3, q: Quat) {
+        self.set_center_pose_turned(c, q, &Mat3::from_quat(q));
+    }
+
+    /// [`Body::set_center_pose`] given `r = Mat3::from_quat(q)` (the solver keeps it).
+    pub fn set_center_pose_turned(&mut self, c: Vec3, q: Quat, r: &Mat3) {
         self.place(Iso::new(c - q.rotate(self.center_local), q));
-        self.update_inertia();
+        if self.is_dynamic() {
+            self.inv_inertia_world = self.inv_inertia_local.rotated(r);
+        }
     }
 }
 

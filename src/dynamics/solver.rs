@@ -658,7 +658,8 @@ fn finalize<const N: usize, const C: usize>(
             continue;
         };
         let c = b.world_center() + sb.dp;
-        b.set_center_pose(c, sb.q);
+        // `sb.rot` is `R(sb.q)`, formed at the last position update.
+        b.set_center_pose_turned(c, sb.q, &sb.rot);
         b.linear_velocity = clamp_length(sb.v, cfg.max_linear_speed);
         b.angular_velocity = clamp_length(sb.w, cfg.max_angular_speed);
     }
