@@ -283,6 +283,14 @@ pub(crate) trait Polytope {
             *d = self.plane(f).0.dot(v);
         }
     }
+    /// `out[f] = n_f · c − d_f`, the height of `c` (in this shape's frame) over each face
+    /// plane, for each face that fits in `out`.
+    fn face_heights(&self, c: Vec3, out: &mut [f32]) {
+        for (f, h) in out.iter_mut().enumerate().take(self.face_count()) {
+            let (n, d) = self.plane(f);
+            *h = n.dot(c) - d;
+        }
+    }
     /// Number of edges.
     fn edge_count(&self) -> usize;
     /// Edge `e`, `None` past the last.
@@ -516,6 +524,17 @@ impl Polytope for ConvexHull {
         let normals = self.normals.get(..self.face_count()).unwrap_or(&[]);
         for (d, n) in out.iter_mut().zip(normals) {
             *d = n.dot(v);
+        }
+    }
+
+    #[inline]
+    fn face_heights(&self, c: Vec3, out: &mut [f32]) {
+        // The planes in place, as `normal_dots` reads the normals.
+        let count = self.face_count();
+        let normals = self.normals.get(..count).unwrap_or(&[]);
+        let offsets = self.offsets.get(..count).unwrap_or(&[]);
+        for ((h, n), d) in out.iter_mut().zip(normals).zip(offsets) {
+            *h = n.dot(c) - d;
         }
     }
 
@@ -1017,24 +1036,30 @@ fn query_with<A: Polytope, B: Polytope>(
     const _: () = assert!(MAX_HULL_FACES <= 128);
     let mut table = [0.0f32; 256];
     let (dots, heights_a) = table.split_at_mut(128);
-    face_heights(a, center_b_in_a, heights_a);
-    face_heights(b, center_a_in_b, dots);
+    a.face_heights(center_b_in_a, heights_a);
+    b.face_heights(center_a_in_b, dots);
     // Past the table (never, for the shapes here): no bound, nothing skipped.
     let height = |t: &[f32], f: usize| t.get(f).copied().unwrap_or(f32::INFINITY);
+    // Each shape's heights, one per face: every polytope has at most `MAX_HULL_FACES`
+    // faces, which fit a half of the table (checked above).
+    let (heights_of_a, heights_of_b) = (
+        heights_a.get(..a.face_count()).unwrap_or(heights_a),
+        dots.get(..b.face_count()).unwrap_or(dots),
+    );
     // Face f of A: `s_f = min_B n·y − d ≤ n·c_B − r_B − d` (`c_B` in A's frame).
     let face_a = best_face(
-        a.face_count(),
+        heights_of_a,
+        r_b,
         |f| face_a_separation(a, b, fr, f),
-        |f| height(heights_a, f) - r_b,
         margin,
         slack,
     )
     .map_err(|f| SatAxis::FaceA(f as u16))?;
     // Face g of B: `s_g = min_A m·x − e ≤ m·c_A − r_A − e` (in B's frame).
     let face_b = best_face(
-        b.face_count(),
+        heights_of_b,
+        r_a,
         |g| face_b_separation(a, b, fr, g),
-        |g| height(dots, g) - r_a,
         margin,
         slack,
     )
@@ -1179,33 +1204,35 @@ fn query_with<A: Polytope, B: Polytope>(
 /// bound assumes). Rounding is about `10⁻⁶` of the same scale, a hull's tolerance `10⁻⁵`.
 const PRUNE_SLACK: f32 = 10.0;
 
-/// The best (largest) of `count` face separations `separation(f)`, ties to the lowest
-/// index, or `Err(f)` for the first face in index order that separates by more than
-/// `margin`: what a loop over every face in order returns, bit for bit, while skipping
-/// faces that cannot matter.
+/// The best (largest) of the face separations `separation(f)`, one face per entry of
+/// `heights`, ties to the lowest index, or `Err(f)` for the first face in index order that
+/// separates by more than `margin`: what a loop over every face in order returns, bit for
+/// bit, while skipping faces that cannot matter.
 ///
-/// `bound(f)` is an upper bound of `separation(f)` within `slack`: the other shape lies on
-/// the far side of a ball about its centre, so its support along a face normal is at most
-/// the centre's minus the ball's radius (the face's separation at the centre, less the
-/// radius). The face with the largest bound is measured first, so the best separation is
-/// usually known at once; a face whose bound is below the best so far, or (when looking
-/// for a separating face) at most the margin, is never measured. Work: `count` bounds (one
-/// product each) and typically a quarter of the support queries.
+/// `heights[f] − radius` is an upper bound of `separation(f)` within `slack`: the other
+/// shape lies on the far side of a ball of `radius` about its centre, whose height over
+/// face `f` is `heights[f]`, so its support along a face normal is at most the centre's
+/// minus the ball's radius. The face with the largest bound is measured first, so the
+/// best separation is usually known at once; a face whose bound is below the best so far,
+/// or (when looking for a separating face) at most the margin, is never measured. Work:
+/// one subtraction and one addition per face and typically a quarter of the support
+/// queries.
 #[inline]
 fn best_face(
-    count: usize,
+    heights: &[f32],
+    radius: f32,
     separation: impl Fn(usize) -> f32,
-    bound: impl Fn(usize) -> f32,
     margin: f32,
     slack: f32,
 ) -> Result<FaceBest, usize> {
     // The bounds are computed again where needed rather than kept in a table: a table
     // sized for the largest hull would add half a kibibyte to the stack of every contact.
-    let bound_of = |f: usize| bound(f) + slack;
+    // Each is one subtraction and one addition from the face's height, read in place.
+    let bound_of = |h: f32| (h - radius) + slack;
     let mut first = 0usize;
     let mut first_bound = f32::NEG_INFINITY;
-    for f in 0..count {
-        let u = bound_of(f);
+    for (f, &h) in heights.iter().enumerate() {
+        let u = bound_of(h);
         if u > first_bound {
             (first, first_bound) = (f, u);
         }
@@ -1214,15 +1241,15 @@ fn best_face(
         index: 0,
         separation: f32::NEG_INFINITY,
     };
-    let s_first = if count > 0 {
-        separation(first)
-    } else {
+    let s_first = if heights.is_empty() {
         f32::NEG_INFINITY
+    } else {
+        separation(first)
     };
     if s_first > margin {
         // Separated: the first face in order that shows it (`first` at the latest).
-        for f in 0..first {
-            if bound_of(f) > margin && separation(f) > margin {
+        for (f, &h) in heights.iter().enumerate().take(first) {
+            if bound_of(h) > margin && separation(f) > margin {
                 return Err(f);
             }
         }
@@ -1234,9 +1261,9 @@ fn best_face(
             separation: s_first,
         };
     }
-    for f in 0..count {
+    for (f, &h) in heights.iter().enumerate() {
         // A NaN bound compares false: the face is measured.
-        if f == first || bound_of(f) < best.separation {
+        if f == first || bound_of(h) < best.separation {
             continue;
         }
         let s = separation(f);
@@ -1258,15 +1285,6 @@ fn best_face(
 /// into an angle on the Gauss map by at most `1 / EDGE_PARALLEL_SIN` (the pair's edges are
 /// at least that far from parallel), doubled for rounding.
 const ARC_WIDENING: f32 = 2.0 * EDGE_TILT_SIN / EDGE_PARALLEL_SIN;
-
-/// `out[f] = n_f · c − d_f` for each face `f` of `p` (`c` in `p`'s frame) that fits.
-#[inline]
-fn face_heights<P: Polytope>(p: &P, c: Vec3, out: &mut [f32]) {
-    for (f, h) in out.iter_mut().enumerate().take(p.face_count()) {
-        let (n, d) = p.plane(f);
-        *h = n.dot(c) - d;
-    }
-}
 
 /// [`edge_below`] decided from the heights `h0`, `h1` of the other shape's centre over
 /// the edge's two face planes, when they suffice: `Some(false)` when an end reaches
