@@ -7,7 +7,9 @@
 //! by `get`), and pairs of `u32` take bucket passes first ([`sort_pairs`]). Neither is
 //! stable, but both are deterministic: the output depends only on the input order and the
 //! comparison, so equal keys land in the same order on every target. The pipeline sorts
-//! unique keys, where stability does not matter.
+//! unique keys, where stability does not matter. The solver's visit order, whose pairs
+//! arrive in the order of their second components, takes a stable radix sort through a
+//! scratch buffer instead ([`sort_pairs_radix`]): the same order, fewer instructions.
 
 /// Sort `v` ascending.
 pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
@@ -23,7 +25,7 @@ pub(crate) fn sort_unstable<T: Ord>(v: &mut [T]) {
 /// puts one pair where it belongs, at most `n` swaps), and each range is sorted by
 /// insertion when it holds at most [`INSERTION_MAX`] pairs, by a second bucket pass over
 /// its own span when it holds more, and by the heapsort past [`BUCKET_LEVELS`] passes
-/// (so the worst case stays O(n log n)). The solver's hashed keys and the broad phase's
+/// (so the worst case stays O(n log n)). The broad phase's and continuous collision's
 /// slot pairs spread over the ranges, so most hold a few pairs. The result is the one
 /// sorted order of the keys, whichever way it was reached.
 pub(crate) fn sort_pairs(v: &mut [(u32, u32)]) {
@@ -157,10 +159,11 @@ fn sort_keys_from(v: &mut [(u32, u32)], level: u32) {
 /// arrays of [`BUCKETS`] `u32` positions on the stack, 4 KiB).
 const BUCKET_LEVELS: u32 = 2;
 
-/// Ranges of [`sort_pairs`]' bucket pass (a power of two). The solver's visit order sorts
-/// one key per contact each step (about 7,000 in `jolt_pyramid`): 512 ranges leave about
-/// 14 keys to each, sorted by insertion at once. With 256 ranges and [`INSERTION_MAX`] 64
-/// the sort took a third more instructions (141 M against 106 M over 100 steps).
+/// Ranges of [`sort_pairs`]' bucket pass (a power of two). Tuned when the solver's visit
+/// order came here (one key per contact each step, about 7,000 in `jolt_pyramid`; now
+/// [`sort_pairs_radix`]): 512 ranges left about 14 keys to each, sorted by insertion at
+/// once. With 256 ranges and [`INSERTION_MAX`] 64 the sort took a third more
+/// instructions (141 M against 106 M over 100 steps).
 const BUCKETS: usize = 512;
 
 /// Longest range [`sort_pairs`] sorts by insertion (at most `INSERTION_MAX²/2` moves, no
