@@ -606,8 +606,15 @@ impl<'a> Body<'a> {
     #[inline]
     pub fn update_inertia(&mut self) {
         if self.is_dynamic() {
-            let r = Mat3::from_quat(self.pose.rotation);
-            self.inv_inertia_world = self.inv_inertia_local.rotated(&r);
+            self.update_inertia_turned(&Mat3::from_quat(self.pose.rotation));
+        }
+    }
+
+    /// [`Body::update_inertia`] given `r`, the pose's rotation as a matrix.
+    #[inline]
+    fn update_inertia_turned(&mut self, r: &Mat3) {
+        if self.is_dynamic() {
+            self.inv_inertia_world = self.inv_inertia_local.rotated(r);
         }
     }
 
@@ -629,15 +636,14 @@ impl<'a> Body<'a> {
 
     /// Move the body so its centre of mass is at `c` with rotation `q` (projection, CCD).
     pub fn set_center_pose(&mut self, c: Vec3, q: Quat) {
-        self.set_center_pose_turned(c, q, &Mat3::from_quat(q));
+        self.place(Iso::new(c - q.rotate(self.center_local), q));
+        self.update_inertia();
     }
 
     /// [`Body::set_center_pose`] given `r = Mat3::from_quat(q)` (the solver keeps it).
     pub fn set_center_pose_turned(&mut self, c: Vec3, q: Quat, r: &Mat3) {
         self.place(Iso::new(c - q.rotate(self.center_local), q));
-        if self.is_dynamic() {
-            self.inv_inertia_world = self.inv_inertia_local.rotated(r);
-        }
+        self.update_inertia_turned(r);
     }
 }
 
