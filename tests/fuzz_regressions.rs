@@ -1672,3 +1672,38 @@ fn a_certified_stall_answers_along_its_upper_bound() {
     let d = distance(&a, &unit, &b, &moved, &mut SimplexCache::default()).unwrap();
     assert!(d.distance > 0.0, "{p:?} {d:?}");
 }
+
+/// Root cause: GJK stopped with the cores apart on a sliver triangle of `D` (the sphere's
+/// centre against two 8 m hull edges that meet at 3·10⁻⁵ rad, 3.9 cm away). The closest
+/// point, the origin's projection on the triangle's plane, was right, and so was the
+/// distance; but the barycentric coordinates come from projected areas, each carrying a
+/// few ulps of the 8 m edges squared against a total area of 10⁻³ m², and the hull's
+/// witness slid 6.6 mm along the edge: the witnesses stood 0.9 mm further apart than the
+/// distance. Fix (`collide::gjk::is_sliver`): a search that stops apart on a sliver
+/// finishes its coordinates in f64.
+#[test]
+fn witnesses_on_a_sliver_of_the_difference_are_finished_in_f64() {
+    // sphere-by-a-bent-sliver-hull-496c6ce0 (narrow_phase, a 10-minute random run at
+    // 84dc321 from the corpus of the ones before; fails on the code before it too).
+    let a = Shape::sphere(f(0x3c7a0000)).unwrap();
+    let h = hull(&[
+        v(0x2c2c2c47, 0, 0x40fc8e00),
+        v(0, 0x39800000, 0xc0f97800),
+        v(0x4024a400, 0x4024c400, 0x4024fc00),
+        v(0x4024a400, 0, 0xb9800000),
+        v(0, 0, 0),
+    ]);
+    let b = Shape::hull(&h);
+    let pa = pose(
+        v(0, 0x41, 0),
+        [0x3f1ae694, 0xbdcc1c37, 0xbf219498, 0x3ef32ad6],
+    );
+    let pb = Iso::new(v(0x3d1e0000, 0xff, 0), Quat::IDENTITY);
+    assert_cases(&[("496c6ce0", a, pa, b, pb, f(0x3ea6a800))]);
+    // The hull's point is its corner at its origin (the edges run along ±z from there),
+    // and the witnesses are the distance apart.
+    let d = distance(&a, &pa, &b, &pb, &mut SimplexCache::default()).unwrap();
+    assert!(d.point_b.z.abs() < 1.0e-5, "{d:?}");
+    let gap = (d.point_b - d.point_a).length();
+    assert!((gap - d.distance).abs() < 1.0e-6, "{gap} {d:?}");
+}

@@ -720,17 +720,24 @@ pub(crate) fn s2d(a: Vec3, b: Vec3, c: Vec3) -> ([f32; 3], Vec3) {
 /// corner opposite the long edge gives it to 1e-7 rad.
 #[inline]
 pub(crate) fn triangle_normal(a: Vec3, b: Vec3, c: Vec3) -> Vec3 {
+    normal_and_longest_edge(a, b, c).0
+}
+
+/// [`triangle_normal`] and the triangle's longest edge squared (the largest of the three
+/// squared lengths it compares; NaN when a comparison cannot tell).
+#[inline]
+fn normal_and_longest_edge(a: Vec3, b: Vec3, c: Vec3) -> (Vec3, f32) {
     let (ab, bc, ca) = (
         (b - a).length_squared(),
         (c - b).length_squared(),
         (a - c).length_squared(),
     );
     if bc >= ab && bc >= ca {
-        (b - a).cross(c - a)
+        ((b - a).cross(c - a), bc)
     } else if ca >= ab {
-        (c - b).cross(a - b)
+        ((c - b).cross(a - b), ca)
     } else {
-        (a - c).cross(b - c)
+        ((a - c).cross(b - c), ab)
     }
 }
 
@@ -1026,6 +1033,12 @@ pub(crate) fn gjk_cores(
     // The final simplex is read where it is (no copy) unless f64 refines it.
     let refined;
     let simplex: &Simplex = match stop {
+        Some(Stop::Separated) if is_sliver(simplex) => {
+            // Apart, on a sliver of `D`: the coordinates are finished in f64.
+            (refined, status) = gjk_f64::refine(pa, pb, simplex, size2, max_iterations);
+            v = refined.closest();
+            &refined
+        }
         Some(Stop::Separated) => {
             status = GjkStatus::Separated;
             simplex
@@ -1049,6 +1062,28 @@ pub(crate) fn gjk_cores(
     }
     write_cache(simplex, cache);
     core_distance(pa, pb, simplex, status, iterations, size2)
+}
+
+/// Below this ratio of a triangle's `|n|` (twice its area) to its longest edge squared
+/// (about the sine of its smallest angle), the triangle is a sliver: see [`is_sliver`].
+const GJK_SLIVER: f32 = 1.0e-3;
+
+/// True when the simplex is a triangle of `D` so thin that its barycentric coordinates
+/// from projected areas ([`s2d`]) are unreliable: each area carries the rounding of the
+/// longest edge squared, a few ulps of `L²`, against a total of `|n|`, so a coordinate is
+/// off by about `10⁻⁷ L² / |n|` and a witness point slides that fraction of `L` along the
+/// sliver. The closest point itself, the origin's projection on the plane, stays
+/// accurate, and so does the distance. A sphere 2.3 cm from a hull whose two 8 m edges
+/// meet at 3·10⁻⁵ rad got its point on the hull 6.6 mm along the edge, its witnesses
+/// 0.9 mm further apart than the distance (fuzz finding `sphere-by-a-bent-sliver-hull-496c6ce0`).
+/// False for NaN.
+fn is_sliver(s: &Simplex) -> bool {
+    if s.count != 3 {
+        return false;
+    }
+    let [w0, w1, w2, _] = s.vertices.map(|v| v.w);
+    let (n, longest) = normal_and_longest_edge(w0, w1, w2);
+    n.length_squared() < GJK_SLIVER * GJK_SLIVER * longest * longest
 }
 
 /// GJK's answer from its final simplex and status (`size2`: the largest `|w|²` seen).
@@ -1133,6 +1168,42 @@ mod tests {
 
     fn close(a: Vec3, b: Vec3, tol: f32) -> bool {
         (a - b).length() <= tol
+    }
+
+    /// A simplex of the points `w` (no shapes behind them).
+    fn simplex_of(ws: &[Vec3]) -> Simplex {
+        let mut s = Simplex::default();
+        for &w in ws {
+            s.push(SimplexVertex {
+                w,
+                ..SimplexVertex::default()
+            });
+        }
+        s
+    }
+
+    /// The fuzz finding's triangle (two 8 m edges at 3·10⁻⁵ rad) is a sliver, at any
+    /// scale and turned; a right triangle, one at 0.1 rad, a segment and a triangle
+    /// with a NaN are not.
+    #[test]
+    fn slivers_are_told_from_triangles_whose_areas_can_be_trusted() {
+        let q = crate::math::Quat::from_xyzw(0.605, -0.0997, -0.631, 0.475).normalize();
+        for scale in [1.0e-3, 1.0, 100.0] {
+            let turned = |p: Vec3| q.rotate(p * scale);
+            let sliver = [
+                Vec3::new(0.0386, 0.0, 0.0),
+                Vec3::new(0.0386, 0.0, 7.89),
+                Vec3::new(0.0386, 0.000244, -7.8),
+            ];
+            assert!(is_sliver(&simplex_of(&sliver.map(turned))), "{scale}");
+            let right = [Vec3::X, Vec3::Y, Vec3::ZERO];
+            assert!(!is_sliver(&simplex_of(&right.map(turned))), "{scale}");
+            let thin = [Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.05, 0.0)];
+            assert!(!is_sliver(&simplex_of(&thin.map(turned))), "{scale}");
+        }
+        assert!(!is_sliver(&simplex_of(&[Vec3::ZERO, Vec3::X])));
+        let nan = [Vec3::ZERO, Vec3::X, Vec3::new(f32::NAN, 0.0, 0.0)];
+        assert!(!is_sliver(&simplex_of(&nan)));
     }
 
     fn combine(p: &[Vec3], l: &[f32]) -> Vec3 {
