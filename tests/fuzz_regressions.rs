@@ -1683,8 +1683,8 @@ fn a_certified_stall_answers_along_its_upper_bound() {
 /// finishes its coordinates in f64.
 #[test]
 fn witnesses_on_a_sliver_of_the_difference_are_finished_in_f64() {
-    // sphere-by-a-bent-sliver-hull-496c6ce0 (narrow_phase, a 10-minute random run at
-    // 84dc321 from the corpus of the ones before; fails on the code before it too).
+    // sphere-by-a-bent-sliver-hull-496c6ce0 (narrow_phase, about 3 minutes into a random
+    // run at 84dc321 from the corpus of the ones before; fails on the code before it too).
     let a = Shape::sphere(f(0x3c7a0000)).unwrap();
     let h = hull(&[
         v(0x2c2c2c47, 0, 0x40fc8e00),

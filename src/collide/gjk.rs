@@ -1030,30 +1030,26 @@ pub(crate) fn gjk_cores(
         core::mem::swap(&mut simplex, &mut next);
         v = v_next;
     }
-    // The final simplex is read where it is (no copy) unless f64 refines it.
+    // The final simplex is read where it is (no copy) unless f64 finishes the search: a
+    // stop f32 cannot decide, or one apart on a sliver of `D` (coordinates f32 cannot
+    // trust). At most `max_iterations` more supports.
+    let in_f64 = match stop {
+        Some(Stop::Undecided) => true,
+        Some(Stop::Separated) => is_sliver(simplex),
+        _ => false,
+    };
     let refined;
-    let simplex: &Simplex = match stop {
-        Some(Stop::Separated) if is_sliver(simplex) => {
-            // Apart, on a sliver of `D`: the coordinates are finished in f64.
-            (refined, status) = gjk_f64::refine(pa, pb, simplex, size2, max_iterations);
-            v = refined.closest();
-            &refined
+    let simplex: &Simplex = if in_f64 {
+        (refined, status) = gjk_f64::refine(pa, pb, simplex, size2, max_iterations);
+        v = refined.closest();
+        &refined
+    } else {
+        match stop {
+            Some(Stop::Separated) => status = GjkStatus::Separated,
+            Some(Stop::Overlapping) => status = GjkStatus::Overlapping,
+            _ => {}
         }
-        Some(Stop::Separated) => {
-            status = GjkStatus::Separated;
-            simplex
-        }
-        Some(Stop::Overlapping) => {
-            status = GjkStatus::Overlapping;
-            simplex
-        }
-        Some(Stop::Undecided) => {
-            // At most `max_iterations` more supports, in f64.
-            (refined, status) = gjk_f64::refine(pa, pb, simplex, size2, max_iterations);
-            v = refined.closest();
-            &refined
-        }
-        None => simplex,
+        simplex
     };
     if status == GjkStatus::IterationLimit
         && (simplex.count == 4 || touches_origin(v, simplex.count, size2))
