@@ -59,8 +59,8 @@
 //! `pruned_query_matches_the_full_test_bit_for_bit` compares them). Edges are pruned only
 //! when every edge of both shapes runs along its faces' crossing line within `10⁻⁵` rad
 //! (a merged, slightly non-planar hull face can break that), with the arc widened for
-//! that tilt, and only the edges of a shape that holds a ball (a box's or a hull's, also
-//! against a triangle, not a triangle's: see `edge_below`); every bound carries a slack of
+//! that tilt, and only when one of the two shapes holds a ball (a box or a hull, so a
+//! triangle's edges too against one of them: see `edge_below`); every bound carries a slack of
 //! ten axis-choice tolerances for rounding and for a hull's vertices lying up to its
 //! build tolerance inside its planes. On the `hulls` scene this halves the test's work.
 //!
@@ -284,8 +284,14 @@ pub(crate) trait Polytope {
     #[inline]
     fn normal_dots(&self, v: Vec3, out: &mut [f32]) {
         for (f, d) in out.iter_mut().enumerate().take(self.face_count()) {
-            *d = self.plane(f).0.dot(v);
+            *d = self.normal_dot(f, v);
         }
+    }
+    /// `n_f · v` for face `f`'s normal: one product of [`Polytope::normal_dots`], bit for
+    /// bit.
+    #[inline]
+    fn normal_dot(&self, f: usize, v: Vec3) -> f32 {
+        self.plane(f).0.dot(v)
     }
     /// `out[f] = n_f · c − d_f`, the height of `c` (in this shape's frame) over each face
     /// plane, for each face that fits in `out`.
@@ -540,6 +546,12 @@ impl Polytope for ConvexHull {
     }
 
     #[inline]
+    fn normal_dot(&self, f: usize, v: Vec3) -> f32 {
+        // As `normal_dots` reads it; a face past the last (never asked) reads 0.
+        self.normals.get(f).map_or(0.0, |n| n.dot(v))
+    }
+
+    #[inline]
     fn face_heights(&self, c: Vec3, out: &mut [f32]) {
         // The planes in place, as `normal_dots` reads the normals.
         let count = self.face_count();
@@ -613,8 +625,8 @@ impl Polytope for ConvexHull {
 /// same end points and feature ids. The side faces are true separating axes (the edge is
 /// the triangle's support along `m`) but have no polygon: a side face chosen as the
 /// reference makes the clipping find nothing, and the caller falls back to the general
-/// path. There is no ball inside a triangle ([`Polytope::inner_radius`] is 0), so its own
-/// edges are never pruned; the other shape's are (see `edge_below`).
+/// path. There is no ball inside a triangle ([`Polytope::inner_radius`] is 0): its edges
+/// are pruned by the other shape's ball (see `edge_below`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct TrianglePolytope {
     vertices: [Vec3; 3],
@@ -650,7 +662,7 @@ impl Polytope for TrianglePolytope {
     fn has_well_formed_edges(&self) -> bool {
         // Each edge runs along the crossing line of its two faces: the front (or back)
         // face and a side face built perpendicular to it through the edge. With no ball
-        // inside, the triangle's own edges are never pruned (`query_with`).
+        // inside, its edges are pruned only against a shape that holds one (`query_with`).
         true
     }
 
@@ -1092,11 +1104,11 @@ fn query_with<A: Polytope, B: Polytope>(
     // `edge_below`): only an edge pair that separates more than the best face can end
     // the test, win the axis choice or raise the exact separation.
     let best_face_separation = scalar::max(face_a.separation, face_b.separation);
-    // A shape's edges may be pruned when both shapes' edges are well formed and it holds
-    // a ball (see `edge_below`): both a box's or hull's against another, only theirs
-    // against a triangle.
+    // Edges may be pruned when both shapes' edges are well formed and one of the shapes
+    // holds a ball (see `edge_below`): every box or hull pair, a triangle against either.
     let well_formed = prune && a.has_well_formed_edges() && b.has_well_formed_edges();
-    let (prune_a, prune_b) = (well_formed && r_a > 0.0, well_formed && r_b > 0.0);
+    let either_ball = r_a > 0.0 || r_b > 0.0;
+    let (prune_a, prune_b) = (well_formed && either_ball, well_formed && either_ball);
     // An edge is first judged by its faces' heights (no edge formed), and measured by
     // `edge_below` only when they cannot tell. `|w| ≤ |c| + radius` for `w` from any
     // vertex to the other centre `c`.
@@ -1161,6 +1173,13 @@ fn query_with<A: Polytope, B: Polytope>(
         *slot = e.faces;
     }
     let pairs_b = pairs_b.get(..edges_b.len()).unwrap_or(&[]);
+    // With every B edge pruned no pair is left to measure.
+    if pairs_b.is_empty() {
+        return Ok((face_a, face_b, edge));
+    }
+    // Few B edges left (two faces each, fewer than B has): only their faces' products
+    // are formed; the pairs read no other.
+    let sparse = 2 * pairs_b.len() < faces_b;
     // The A edge whose products `dots` and passing pairs `passing[..count]` are: an edge
     // with the same vector (a triangle's two halves of one edge) reads them as they are.
     let mut dots_of: Option<usize> = None;
@@ -1190,7 +1209,17 @@ fn query_with<A: Polytope, B: Polytope>(
         let arc = ArcA::new(ea, fr);
         let twin = a.repeats_previous_edge(ia) && dots_of.is_some_and(|d| d + 1 == ia);
         if !twin {
-            b.normal_dots(arc.vector_b, dots.get_mut(..faces_b).unwrap_or(&mut []));
+            if sparse {
+                for &(f0, f1) in pairs_b {
+                    for f in [f0 as usize, f1 as usize] {
+                        if let Some(d) = dots.get_mut(f) {
+                            *d = b.normal_dot(f, arc.vector_b);
+                        }
+                    }
+                }
+            } else {
+                b.normal_dots(arc.vector_b, dots.get_mut(..faces_b).unwrap_or(&mut []));
+            }
             count = 0;
             for (k, &(f0, f1)) in pairs_b.iter().enumerate() {
                 let cba = dots.get(f0 as usize).copied().unwrap_or(0.0);
@@ -1386,13 +1415,14 @@ fn edge_below_by_heights(h0: f32, h1: f32, slack: f32, reach: f32, threshold: f3
 /// the caller passes `threshold = best face separation + r − slack`.
 ///
 /// Edge pairs are only pruned when both shapes' edges are well formed, since the
-/// Gauss-map test then puts the axis on both arcs (within the widening), and only the
-/// edges of a shape that holds a ball (inner radius `r > 0`): every normal on its arc
-/// gives `n · (p − c) ≥ r` there, so the centre rule of [`edge_axis`] orients the axis
-/// onto that arc (by this shape's lever, or by the other's when that is larger still,
-/// which the other's arc then signs the same way) and never to the antipode. The other
-/// shape only has to contain the centre it is measured from (`r` may be 0 there: a
-/// triangle's centroid).
+/// Gauss-map test then puts the axis on both arcs (within the widening), and only when
+/// one of the shapes holds a ball (inner radius `r > 0`), either one: along the true axis
+/// `X` (on both arcs) each shape's lever `±X · (p − c)` is at least 0, and the one with
+/// the ball's at least `r`, so the larger lever, which the centre rule of [`edge_axis`]
+/// signs the axis by, is at least `r` and signs it `X`, never the antipode. Then the
+/// axis lies on the arc of each edge of the pair, a triangle's included. A shape's edges
+/// are bounded from the other shape's centre, which that shape only has to contain (`r`
+/// may be 0 there: a triangle's centroid).
 #[inline(always)]
 fn edge_below(e: &PolyEdge, c: Vec3, threshold: f32) -> bool {
     let w = c - e.p0;
@@ -2801,9 +2831,10 @@ mod tests {
         assert!(checked > 5_000, "{checked}");
     }
 
-    /// The same against triangles, where only the box's or hull's edges are pruned (the
-    /// triangle holds no ball): hull–triangle, triangle–hull, box–triangle and
-    /// triangle–box pairs, thin and wide triangles, apart to deeply overlapping.
+    /// The same against triangles, whose edges are pruned by the box's or hull's ball
+    /// (the triangle holds none): hull–triangle, triangle–hull, box–triangle and
+    /// triangle–box pairs, thin and wide triangles, some far from their frame's origin as
+    /// a mesh's are, apart to deeply overlapping.
     #[test]
     fn pruned_query_against_triangles_matches_the_full_test_bit_for_bit() {
         let mut rng = SplitMix64::new(15);
@@ -2824,40 +2855,49 @@ mod tests {
             } else {
                 corner(&mut rng)
             };
-            let Ok(t) = Triangle::new(p, q, r) else {
+            // Every fourth far from its frame's origin, as a mesh's triangles lie.
+            let offset = if round % 4 == 3 {
+                Vec3::new(11.5, -3.0, 7.25)
+            } else {
+                Vec3::ZERO
+            };
+            let Ok(t) = Triangle::new(p + offset, q + offset, r + offset) else {
                 continue;
             };
             let tri = TrianglePolytope::new(&t);
             for _ in 0..40 {
-                let b_in_a = Iso::new(rng.unit_vector() * rng.range(0.0, 1.5), rng.rotation());
-                let fr = Frame::new(&b_in_a);
+                let (u, rot) = (rng.unit_vector() * rng.range(0.0, 1.5), rng.rotation());
+                // The other shape about the triangle: moved by the offset when the triangle
+                // is A, the triangle's offset turned back when it is B.
+                let tri_a = Frame::new(&Iso::new(u + offset, rot));
+                let tri_b = Frame::new(&Iso::new(u - rot.rotate(offset), rot));
                 let margin = if round % 2 == 0 { 0.02 } else { 0.3 };
-                let case = |what: &str| std::format!("{what}, round {round}, {b_in_a:?}");
+                let case = |what: &str| std::format!("{what}, round {round}, {u:?} {rot:?}");
                 seen.add(&pruned_is_full(
                     &hull,
                     &tri,
-                    &fr,
+                    &tri_b,
                     margin,
                     &case("hull-triangle"),
                 ));
                 seen.add(&pruned_is_full(
                     &tri,
                     &hull,
-                    &fr,
+                    &tri_a,
                     margin,
                     &case("triangle-hull"),
                 ));
                 seen.add(&pruned_is_full(
                     &boxed,
                     &tri,
-                    &fr,
+                    &tri_b,
                     margin,
                     &case("box-triangle"),
                 ));
                 seen.add(&pruned_is_full(
                     &tri,
                     &boxed,
-                    &fr,
+                    &tri_a,
                     margin,
                     &case("triangle-box"),
                 ));
