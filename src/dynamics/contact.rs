@@ -480,6 +480,8 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     let len = contacts.len();
     let mut tested = 0u32;
     let (mut group_key, mut group_start) = (u64::MAX, 0usize);
+    // Whether the current pair's part contacts stay: the same for each (`part_kept`).
+    let mut parts_kept: Option<bool> = None;
     let slots = contacts.as_mut_slice();
     for read in 0..len {
         // Compact in place: the contact moves down to `write` (at most one copy).
@@ -499,6 +501,7 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
             // The first contact of a pair: a mesh or compound pair's group starts here.
             group_key = key;
             group_start = write;
+            parts_kept = None;
         }
         let Some((parts, rest)) = slots.split_at_mut_checked(write) else {
             break;
@@ -513,7 +516,8 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
             let group = parts.get_mut(group_start..).unwrap_or(&mut []);
             update_record(c, group, bodies, cfg, &mut tested)
         } else if c.is_part() {
-            part_kept(c, bodies)
+            c.hit_due = false;
+            *parts_kept.get_or_insert_with(|| part_kept(c, bodies))
         } else {
             update_one(c, bodies, cfg, &mut tested)
         };
@@ -528,17 +532,21 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     contacts.truncate(write);
     hit_events(contacts, bodies, cfg, events, report);
     report.pairs = tested;
-    report.contacts = 0;
-    report.points = 0;
-    for c in contacts.iter().filter(|c| c.len > 0) {
-        report.contacts = report.contacts.saturating_add(1);
-        report.points = report.points.saturating_add(u32::from(c.len));
+    // No sum wraps: at most four points per contact, and no buffer holds 2³⁰ contacts
+    // (344 bytes each).
+    let (mut touching, mut points) = (0u32, 0u32);
+    for c in contacts.iter() {
+        touching = touching.wrapping_add(u32::from(c.len > 0));
+        points = points.wrapping_add(u32::from(c.len));
     }
+    report.contacts = touching;
+    report.points = points;
 }
 
-/// A part contact stays while its pair does (its narrow phase runs with its record's).
-fn part_kept<const N: usize>(c: &mut Contact, bodies: &Pool<Body<'_>, N>) -> bool {
-    c.hit_due = false;
+/// A part contact stays while its pair does (its narrow phase runs with its record's):
+/// while both bodies exist and their enlarged boxes overlap, the same for every part
+/// contact of the pair.
+fn part_kept<const N: usize>(c: &Contact, bodies: &Pool<Body<'_>, N>) -> bool {
     match (bodies.at(c.a as usize), bodies.at(c.b as usize)) {
         (Some(a), Some(b)) => a.fat.overlaps(&b.fat),
         _ => false,
@@ -1353,7 +1361,7 @@ fn hit_events<const N: usize, const E: usize>(
     let mut pending: Option<(&Contact, &ContactPoint)> = None;
     for c in contacts {
         let due = if c.is_part() {
-            if let Some(p) = fastest_point(c).filter(|_| c.hit_due) {
+            if let Some(p) = c.hit_due.then(|| fastest_point(c)).flatten() {
                 if pending.is_none_or(|(_, q)| p.approach_speed > q.approach_speed) {
                     pending = Some((c, p));
                 }
