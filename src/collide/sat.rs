@@ -766,9 +766,7 @@ impl Polytope for TrianglePolytope {
     }
 
     fn extent(&self) -> f32 {
-        // As `manifold::polytope_order` measures a triangle.
-        let [u, v, w] = self.vertices;
-        u.abs().max(v.abs()).max(w.abs()).max_elem()
+        triangle_extent(&self.triangle())
     }
 
     fn radius(&self) -> f32 {
@@ -778,6 +776,12 @@ impl Polytope for TrianglePolytope {
     fn geometry(&self) -> Geometry<'_> {
         Geometry::Triangle(&self.vertices)
     }
+}
+
+/// A triangle's largest coordinate (m), as `manifold::polytope_order` measures it.
+fn triangle_extent(t: &Triangle) -> f32 {
+    let [u, v, w] = t.vertices;
+    u.abs().max(v.abs()).max(w.abs()).max_elem()
 }
 
 /// The best face of one shape.
@@ -2143,8 +2147,9 @@ pub(crate) fn capsule_triangle(
     let p1 = b_in_a.inverse_transform_point(s1);
     let d = p1 - p0;
     let r = c.radius;
-    let tri = TrianglePolytope::new(t);
-    let n = tri.normal;
+    // The plane and the face polygons only (no side normals: `TrianglePolytope` forms
+    // those for the polytope test).
+    let n = t.normal();
     let [v0, v1, v2] = t.vertices;
     let (h0, h1) = (n.dot(p0 - v0), n.dot(p1 - v0));
     if h0 * h1 <= 0.0 {
@@ -2158,7 +2163,7 @@ pub(crate) fn capsule_triangle(
         // of rounding size, and the guard on it falls back.
     }
     let tol = SAT_TOLERANCE
-        * (b_in_a.position.abs().max_elem() + tri.extent() + c.half_height + c.radius);
+        * (b_in_a.position.abs().max_elem() + triangle_extent(t) + c.half_height + c.radius);
     // Both ends on one side of the plane and higher above it than the radius and the
     // margin: the closest pair below is at least that far apart, so it would answer
     // `Separated`; answered at once, with the guard that covers the rounding of both.
@@ -2211,8 +2216,8 @@ pub(crate) fn capsule_triangle(
     let to_a = |p: Vec3| b_in_a.transform_point(p);
     // The face on the closest segment point's side (where the clipped part lies when it
     // matters); the segment clipped to the side planes.
-    let front = if n.dot(on_segment - v0) >= 0.0 { 0 } else { 1 };
-    let f = tri.polygon(front);
+    let facing = if n.dot(on_segment - v0) >= 0.0 { n } else { -n };
+    let f = t.supporting_tri(facing);
     let nf = f.normal;
     let (mut front, mut back) = (clip::ClipPolygon::new(), clip::ClipPolygon::new());
     let mut buffers = clip::ClipBuffers::new(&mut front, &mut back);
