@@ -596,7 +596,10 @@ fn update_group(
     let reach = pair_reach(a, b, cfg);
     let frame = TriangleFrame::of(a, b, cfg.speculative_margin + reach);
     let reusable = match &frame {
-        Some(frame) => group.iter().all(|c| frame.reusable(c, a, b)),
+        Some(frame) => {
+            let mut memo = GroupMemo::default();
+            group.iter().all(|c| frame.reusable(c, a, b, &mut memo))
+        }
         None => group.iter().all(|c| {
             plan(c, a, b, cfg, reach, None)
                 .is_some_and(|p| p.reusable(c, p.shape_b.bounding_radius(), a, b))
@@ -830,32 +833,33 @@ impl Plan<'_> {
         // A part contact's second bound: A's radius (a mesh triangle's is about the
         // mesh's origin, far away).
         let radius_a = || self.parts.is_some().then(|| self.shape_a.bounding_radius());
-        reuse_fits(c, &self.b_in_a, self.margin, slack, radius_b, radius_a)
+        let drift = relative_drift(&c.built_pose, &self.b_in_a, radius_b);
+        reuse_fits(c, &self.b_in_a, self.margin, slack, drift, radius_a)
             && arms_kept(c, body_a, body_b, slack)
     }
 }
 
 /// The reuse bounds of contact `c`'s manifold (module docs, "Manifold reuse"), with B's
 /// pose in A's frame now `b_in_a`, this step's `margin`, the pair's `slack` and B's
-/// radius `radius_b`: B's points moved at most `slack` in A's frame, and `margin` plus
-/// that drift is within the margin the manifold was built with. A change in the distance
-/// of two points is bounded by either one's move relative to the other body, so when
-/// B's drift does not fit, A's points in B's frame may: `radius_a` gives A's radius for
-/// that second bound (formed only then; `None`: no second bound, a pair of two bodies).
+/// drift since the build, `drift` ([`relative_drift`] from `c.built_pose` with B's
+/// radius): B's points moved at most `slack` in A's frame, and `margin` plus that drift
+/// is within the margin the manifold was built with. A change in the distance of two
+/// points is bounded by either one's move relative to the other body, so when B's drift
+/// does not fit, A's points in B's frame may: `radius_a` gives A's radius for that second
+/// bound (formed only then; `None`: no second bound, a pair of two bodies).
 #[inline(always)]
 fn reuse_fits(
     c: &Contact,
     b_in_a: &Iso,
     margin: f32,
     slack: f32,
-    radius_b: f32,
+    drift: f32,
     radius_a: impl FnOnce() -> Option<f32>,
 ) -> bool {
     if c.built_margin < 0.0 {
         return false;
     }
     let fits = |drift: f32| drift <= slack && margin + drift <= c.built_margin;
-    let drift = relative_drift(&c.built_pose, b_in_a, radius_b);
     if fits(drift) {
         return true;
     }
@@ -935,21 +939,69 @@ impl TriangleFrame {
 
     /// [`Plan::reusable`] of part contact `c` of bodies `a` and `b`, false where [`plan`]
     /// finds no part pair (a key past A's triangles).
-    fn reusable(&self, c: &Contact, a: &Body<'_>, b: &Body<'_>) -> bool {
+    fn reusable(&self, c: &Contact, a: &Body<'_>, b: &Body<'_>, memo: &mut GroupMemo) -> bool {
         if c.sub == RECORD || c.sub.checked_sub(1).is_none_or(|t| t >= self.triangles) {
             return false;
         }
         let radius_a =
             || mid_phase::part_pair(&a.shape, &b.shape, c.sub).map(|p| p.a.bounding_radius());
-        reuse_fits(
-            c,
-            &self.b_in_a,
-            self.margin,
-            self.slack,
-            self.radius_b,
-            radius_a,
-        ) && arms_kept(c, a, b, self.slack)
+        let drift = match memo.drift {
+            Some((pose, drift)) if same_iso(&pose, &c.built_pose) => drift,
+            _ => {
+                let drift = relative_drift(&c.built_pose, &self.b_in_a, self.radius_b);
+                memo.drift = Some((c.built_pose, drift));
+                drift
+            }
+        };
+        if !reuse_fits(c, &self.b_in_a, self.margin, self.slack, drift, radius_a) {
+            return false;
+        }
+        // An empty manifold keeps no arms (`arms_kept`).
+        if c.len == 0 {
+            return true;
+        }
+        match memo.arms {
+            Some((rot_a, rot_b, kept))
+                if same_quat(&rot_a, &c.built_rot_a) && same_quat(&rot_b, &c.built_rot_b) =>
+            {
+                kept
+            }
+            _ => {
+                let kept = arms_kept(c, a, b, self.slack);
+                memo.arms = Some((c.built_rot_a, c.built_rot_b, kept));
+                kept
+            }
+        }
     }
+}
+
+/// What [`TriangleFrame::reusable`] last computed in one scan of a group: the parts a
+/// group rebuilt together share their built pose and rotations, and the same inputs give
+/// the same bits, so each is formed once per distinct value.
+#[derive(Default)]
+struct GroupMemo {
+    /// A built pose and B's drift since it.
+    drift: Option<(Iso, f32)>,
+    /// Built rotations of A and B, and whether the lever arms kept.
+    arms: Option<(Quat, Quat, bool)>,
+}
+
+/// The same bits in every component (a memo's key: `==` would take `-0` for `0`).
+fn same_quat(p: &Quat, q: &Quat) -> bool {
+    [p.x, p.y, p.z, p.w]
+        .iter()
+        .zip([q.x, q.y, q.z, q.w].iter())
+        .all(|(u, v)| u.to_bits() == v.to_bits())
+}
+
+/// [`same_quat`] for poses.
+fn same_iso(p: &Iso, q: &Iso) -> bool {
+    let (u, v) = (p.position, q.position);
+    [u.x, u.y, u.z]
+        .iter()
+        .zip([v.x, v.y, v.z].iter())
+        .all(|(s, t)| s.to_bits() == t.to_bits())
+        && same_quat(&p.rotation, &q.rotation)
 }
 
 /// True when the boxes of `a` and `b` ([`Body::bounds`]) are more than `margin` apart
@@ -1564,7 +1616,9 @@ mod tests {
     /// contact: random relative poses of a box or a hull over a height field, contacts
     /// built at poses moved by up to twice the slack (both sides of both bounds, the
     /// triangle's own bound among them), margins on both sides of the built one, keys
-    /// past the last triangle and contacts never built.
+    /// past the last triangle and contacts never built; B turned since the build, both
+    /// sides of the arms' bound. Two parts per group share one memo, with the same built
+    /// pose and rotations, the same pose only, or neither.
     #[test]
     fn a_triangle_groups_reuse_test_is_the_plans() {
         use crate::dynamics::body::BodyDesc;
@@ -1582,7 +1636,7 @@ mod tests {
         ];
         let cfg = WorldConfig::DEFAULT;
         let mut rng = SplitMix64::new(11);
-        let (mut reused, mut refused, mut second_bound) = (0, 0, 0);
+        let (mut reused, mut refused, mut second_bound, mut arms_refused) = (0, 0, 0, 0);
         for i in 0..4000 {
             let mut ground = BodyDesc::fixed(Shape::HeightField(&field));
             ground.pose = Iso::new(Vec3::new(rng.range(-1.0, 1.0), 0.0, 0.0), rng.rotation());
@@ -1601,38 +1655,60 @@ mod tests {
                 now.position + rng.unit_vector() * step,
                 crate::math::Quat::from_axis_angle(axis, turn) * now.rotation,
             );
-            let c = Contact {
+            let elsewhere = Iso::new(
+                now.position + rng.unit_vector() * rng.range(0.0, 2.0 * frame.slack),
+                now.rotation,
+            );
+            let mut part = |built: Iso| Contact {
                 a: 0,
                 b: 1,
                 sub: 1 + (rng.next_u64() % 20) as u32, // 18 triangles: some keys past them
                 built_pose: built,
-                // The bodies' own turns since the build are the arms' test's (below).
+                // B's turn since the build is the arms' test's (below), for a contact
+                // with points.
                 built_rot_a: a.pose().rotation,
-                built_rot_b: b.pose().rotation,
+                built_rot_b: crate::math::Quat::from_axis_angle(
+                    axis,
+                    rng.range(0.0, 8.0 * frame.slack),
+                ) * b.pose().rotation,
                 built_margin: if i % 17 == 0 {
                     -1.0
                 } else {
                     frame.margin + rng.range(-0.5, 1.5) * frame.slack
                 },
+                len: u8::from(rng.next_u64().is_multiple_of(4)),
                 ..Contact::default()
             };
-            let by_plan = plan(&c, &a, &b, &cfg, reach, None)
-                .is_some_and(|p| p.reusable(&c, p.shape_b.bounding_radius(), &a, &b));
-            assert_eq!(frame.reusable(&c, &a, &b), by_plan, "contact {i}: {c:?}");
-            if by_plan {
-                reused += 1;
-                let drift = relative_drift(&c.built_pose, &frame.b_in_a, frame.radius_b);
-                second_bound += usize::from(drift > frame.slack);
-            } else {
-                refused += 1;
+            // Two parts of one group, scanned in turn with one memo: the second shares
+            // the first's built pose and rotations, its pose, or neither.
+            let first = part(built);
+            let mut second = part(if i % 3 == 2 { elsewhere } else { built });
+            if i % 3 == 0 {
+                second.built_rot_b = first.built_rot_b;
+            }
+            let mut memo = GroupMemo::default();
+            for c in [first, second] {
+                let by_plan = plan(&c, &a, &b, &cfg, reach, None)
+                    .is_some_and(|p| p.reusable(&c, p.shape_b.bounding_radius(), &a, &b));
+                let by_frame = frame.reusable(&c, &a, &b, &mut memo);
+                assert_eq!(by_frame, by_plan, "contact {i}: {c:?}");
+                arms_refused += usize::from(!arms_kept(&c, &a, &b, frame.slack));
+                if by_plan {
+                    reused += 1;
+                    let drift = relative_drift(&c.built_pose, &frame.b_in_a, frame.radius_b);
+                    second_bound += usize::from(drift > frame.slack);
+                } else {
+                    refused += 1;
+                }
             }
         }
         // Both answers are common, and some reuses hold only by the triangle's bound.
         assert!(
             reused > 400 && refused > 400,
-            "{reused} reused, {refused} refused"
+            "{reused} reused, {refused} refused, {second_bound} by the second bound"
         );
         assert!(second_bound > 0, "the triangle's own bound never decided");
+        assert!(arms_refused > 100, "{arms_refused} refused by the arms");
     }
 
     /// The empty-pair test is sound: whenever two bodies' boxes are more than the margin
