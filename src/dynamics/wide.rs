@@ -993,10 +993,10 @@ fn solve_with<const C: usize>(
             let (g, bodies) = (&mut group, &mut *bodies);
             let full = !overflow && *mask == ALL_LANES;
             if skips {
-                skip_torque_free(g, bodies, a, *mask, full && rows == 1, bouncy);
+                skip_torque_free(g, bodies, a, *mask, (full, rows), bouncy);
                 continue;
             }
-            let all = (ALL_LANES, ALL_LANES);
+            let all = (ALL_LANES, ALL_LANES, 4);
             match (full, rows, bouncy) {
                 (true, 1, false) => solve_group::<1, false, true>(g, bodies, a, all),
                 (true, 2, false) => solve_group::<2, false, true>(g, bodies, a, all),
@@ -1004,7 +1004,7 @@ fn solve_with<const C: usize>(
                 (true, 1, true) => solve_group::<1, true, true>(g, bodies, a, all),
                 (true, 2, true) => solve_group::<2, true, true>(g, bodies, a, all),
                 (true, _, true) => solve_group::<4, true, true>(g, bodies, a, all),
-                _ => solve_group::<4, true, true>(g, bodies, a, (*mask, *mask)),
+                _ => solve_group::<4, true, true>(g, bodies, a, (*mask, *mask, rows)),
             }
         }
         if a.2.last && !any_deep {
@@ -1027,18 +1027,18 @@ fn skip_torque_free(
     bodies: &mut [SolverBody],
     a: (&WorldConfig, f32, Pass),
     mask: [bool; 4],
-    full_single: bool,
+    (full, rows): (bool, usize),
     bouncy: bool,
 ) {
     let free = g.torque_free();
     let rubs: [bool; 4] = core::array::from_fn(|l| {
         mask.get(l).copied().unwrap_or(false) && !free.get(l).copied().unwrap_or(false)
     });
-    let none = (ALL_LANES, NO_LANES);
-    match (full_single && rubs == NO_LANES, bouncy) {
+    let none = (ALL_LANES, NO_LANES, 1);
+    match (full && rows == 1 && rubs == NO_LANES, bouncy) {
         (true, false) => solve_group::<1, false, false>(g, bodies, a, none),
         (true, true) => solve_group::<1, true, false>(g, bodies, a, none),
-        _ => solve_group::<4, true, true>(g, bodies, a, (mask, rubs)),
+        _ => solve_group::<4, true, true>(g, bodies, a, (mask, rubs, rows)),
     }
 }
 
@@ -1089,17 +1089,20 @@ pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
 }
 
 /// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`) in the lanes
-/// `mask`: `ROWS` point rows, with `BOUNCY` the records the restitution pass reads (the
-/// closing speed at impact and the impulse so far; a group without restitution in any
-/// lane skips them, as that pass never reads its lanes), and with `RUB` the friction,
-/// twist and rolling rows of the lanes `rubs`.
+/// `mask`: the first `rows` of its `ROWS` point rows (a full group's kernel has `rows =
+/// ROWS`; the masked kernel's `ROWS` is 4 and `rows` the group's own count, past which no
+/// lane holds a point), with `BOUNCY` the records the restitution pass reads (the closing
+/// speed at impact and the impulse so far; a group without restitution in any lane skips
+/// them, as that pass never reads its lanes), and with `RUB` the friction, twist and
+/// rolling rows of the lanes `rubs`.
 #[inline(always)]
 fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
     (cfg, inv_h, pass): (&WorldConfig, f32, Pass),
-    (mask, rubs): ([bool; 4], [bool; 4]),
+    (mask, rubs, rows): ([bool; 4], [bool; 4], usize),
 ) {
+    let rows = rows.min(ROWS);
     let ia = group.s0.idx;
     let ib = group.s1.idx;
     let sh = Shared::load(&group.s0.s);
@@ -1111,7 +1114,7 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
         let reach_a = NormalReach::gather(&body_a, &n);
         let reach_b = NormalReach::gather(&body_b, &n);
         let moved = reach_b.along - reach_a.along;
-        for j in 0..ROWS {
+        for j in 0..rows {
             let p = group.point_mut(j);
             // s = adjusted + n·((Δp_b + R_b l_b) − (Δp_a + R_a l_a))
             //   = adjusted + (n·Δp_b − n·Δp_a) + ((R_bᵀ n)·l_b − (R_aᵀ n)·l_a)
@@ -1144,7 +1147,7 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
     let mut linear = n.dot(&b.v.sub(&a.v));
     let mass_sum = sh.ma + sh.mb;
     let mut pushed = zero;
-    for j in 0..ROWS {
+    for j in 0..rows {
         let p = group.point_mut(j);
         // This pass's separation in the lanes of `mask` (the others' rows are dropped).
         let s = p.separation;
@@ -1187,7 +1190,7 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool>(
             levers,
             pushed,
         };
-        solve_patch(group, &sh, &mut a, &mut b, cfg, sums, pass.last, ROWS, rubs);
+        solve_patch(group, &sh, &mut a, &mut b, cfg, sums, pass.last, rows, rubs);
         solve_rolling(group, &sh, &mut a, &mut b, total, rubs);
     } else {
         let jn = n.scale(pushed);

@@ -135,6 +135,7 @@ impl Mat3 {
 
     /// `R M Rᵀ` for a rotation `R`: a body-frame inertia (or inverse inertia) tensor seen
     /// in the world frame.
+    #[inline]
     pub fn rotated(&self, r: &Mat3) -> Mat3 {
         *r * *self * r.transpose()
     }
