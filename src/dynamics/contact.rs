@@ -945,11 +945,12 @@ impl TriangleFrame {
         }
         let radius_a =
             || mid_phase::part_pair(&a.shape, &b.shape, c.sub).map(|p| p.a.bounding_radius());
+        let pose = pose_bits(&c.built_pose);
         let drift = match memo.drift {
-            Some((pose, drift)) if same_iso(&pose, &c.built_pose) => drift,
+            Some((key, drift)) if key == pose => drift,
             _ => {
                 let drift = relative_drift(&c.built_pose, &self.b_in_a, self.radius_b);
-                memo.drift = Some((c.built_pose, drift));
+                memo.drift = Some((pose, drift));
                 drift
             }
         };
@@ -960,15 +961,13 @@ impl TriangleFrame {
         if c.len == 0 {
             return true;
         }
+        let (qa, qb) = (c.built_rot_a, c.built_rot_b);
+        let rotations = [qa.x, qa.y, qa.z, qa.w, qb.x, qb.y, qb.z, qb.w].map(f32::to_bits);
         match memo.arms {
-            Some((rot_a, rot_b, kept))
-                if same_quat(&rot_a, &c.built_rot_a) && same_quat(&rot_b, &c.built_rot_b) =>
-            {
-                kept
-            }
+            Some((key, kept)) if key == rotations => kept,
             _ => {
                 let kept = arms_kept(c, a, b, self.slack);
-                memo.arms = Some((c.built_rot_a, c.built_rot_b, kept));
+                memo.arms = Some((rotations, kept));
                 kept
             }
         }
@@ -977,31 +976,20 @@ impl TriangleFrame {
 
 /// What [`TriangleFrame::reusable`] last computed in one scan of a group: the parts a
 /// group rebuilt together share their built pose and rotations, and the same inputs give
-/// the same bits, so each is formed once per distinct value.
+/// the same bits, so each is formed once per distinct value. Keys are the inputs' bits
+/// (`==` on the floats would take `-0` for `0`).
 #[derive(Default)]
 struct GroupMemo {
-    /// A built pose and B's drift since it.
-    drift: Option<(Iso, f32)>,
-    /// Built rotations of A and B, and whether the lever arms kept.
-    arms: Option<(Quat, Quat, bool)>,
+    /// A built pose's bits ([`pose_bits`]) and B's drift since it.
+    drift: Option<([u32; 7], f32)>,
+    /// The bits of A's and B's built rotations, and whether the lever arms kept.
+    arms: Option<([u32; 8], bool)>,
 }
 
-/// The same bits in every component (a memo's key: `==` would take `-0` for `0`).
-fn same_quat(p: &Quat, q: &Quat) -> bool {
-    [p.x, p.y, p.z, p.w]
-        .iter()
-        .zip([q.x, q.y, q.z, q.w].iter())
-        .all(|(u, v)| u.to_bits() == v.to_bits())
-}
-
-/// [`same_quat`] for poses.
-fn same_iso(p: &Iso, q: &Iso) -> bool {
-    let (u, v) = (p.position, q.position);
-    [u.x, u.y, u.z]
-        .iter()
-        .zip([v.x, v.y, v.z].iter())
-        .all(|(s, t)| s.to_bits() == t.to_bits())
-        && same_quat(&p.rotation, &q.rotation)
+/// A pose's bits: its position, then its rotation.
+fn pose_bits(p: &Iso) -> [u32; 7] {
+    let (t, q) = (p.position, p.rotation);
+    [t.x, t.y, t.z, q.x, q.y, q.z, q.w].map(f32::to_bits)
 }
 
 /// True when the boxes of `a` and `b` ([`Body::bounds`]) are more than `margin` apart
