@@ -175,7 +175,11 @@ pub(crate) struct ContactPoint {
 /// normal in A's frame, the pose the manifold was built at). Rust's own layout had put
 /// the pair at byte 192 and the point count and flags at 306 of 312 bytes: two or three
 /// cache lines for every contact visited.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+///
+/// Two contacts are equal when every field and the first `len` points are: the point
+/// slots past `len` hold whatever an earlier contact left there ([`Contact::copy_from`]),
+/// and nothing reads them.
+#[derive(Clone, Copy, Debug, Default)]
 #[repr(C)]
 pub(crate) struct Contact {
     /// Slot of body A (the lower slot).
@@ -236,6 +240,56 @@ pub(crate) struct Contact {
     pub built_pose: Iso,
 }
 
+impl PartialEq for Contact {
+    fn eq(&self, o: &Contact) -> bool {
+        // Every field named: a new field fails to compile here until it is compared.
+        let Contact {
+            a,
+            b,
+            sub,
+            len,
+            sensor,
+            touching,
+            sticking,
+            hit_due,
+            new_parts,
+            sat_cache,
+            normal,
+            material,
+            friction_impulse,
+            twist_impulse,
+            built_margin,
+            apart_gap,
+            points: _,
+            built_rot_a,
+            built_rot_b,
+            normal_local,
+            built_pose,
+        } = self;
+        *a == o.a
+            && *b == o.b
+            && *sub == o.sub
+            && *len == o.len
+            && *sensor == o.sensor
+            && *touching == o.touching
+            && *sticking == o.sticking
+            && *hit_due == o.hit_due
+            && *new_parts == o.new_parts
+            && *sat_cache == o.sat_cache
+            && *normal == o.normal
+            && *material == o.material
+            && *friction_impulse == o.friction_impulse
+            && *twist_impulse == o.twist_impulse
+            && *built_margin == o.built_margin
+            && *apart_gap == o.apart_gap
+            && self.points() == o.points()
+            && *built_rot_a == o.built_rot_a
+            && *built_rot_b == o.built_rot_b
+            && *normal_local == o.normal_local
+            && *built_pose == o.built_pose
+    }
+}
+
 impl Contact {
     /// The pair's key: `(a, b)` packed (the same for every contact of the pair).
     #[inline]
@@ -271,6 +325,63 @@ impl Contact {
             built_margin: -1.0,
             ..Contact::default()
         }
+    }
+
+    /// `src` copied into `self` with only its first `len` points: the point slots past
+    /// them keep what they held. Nothing reads a slot past `len` (snapshots write `len`
+    /// points and restore zeros past them, the checksum hashes `len` points), so the
+    /// contact means what a whole copy would. For the moves within the contact buffer
+    /// (compaction, merge, the mid phase's relocation): a pair without points copies
+    /// 152 of its 344 bytes, one with a point 200, and none calls `memcpy`.
+    #[inline(always)]
+    pub fn copy_from(&mut self, src: &Contact) {
+        // Every field named: a new field fails to compile here until it is copied.
+        let Contact {
+            a,
+            b,
+            sub,
+            len,
+            sensor,
+            touching,
+            sticking,
+            hit_due,
+            new_parts,
+            sat_cache,
+            normal,
+            material,
+            friction_impulse,
+            twist_impulse,
+            built_margin,
+            apart_gap,
+            points,
+            built_rot_a,
+            built_rot_b,
+            normal_local,
+            built_pose,
+        } = src;
+        self.a = *a;
+        self.b = *b;
+        self.sub = *sub;
+        self.len = *len;
+        self.sensor = *sensor;
+        self.touching = *touching;
+        self.sticking = *sticking;
+        self.hit_due = *hit_due;
+        self.new_parts = *new_parts;
+        self.sat_cache = *sat_cache;
+        self.normal = *normal;
+        self.material = *material;
+        self.friction_impulse = *friction_impulse;
+        self.twist_impulse = *twist_impulse;
+        self.built_margin = *built_margin;
+        self.apart_gap = *apart_gap;
+        for (dst, p) in self.points.iter_mut().zip(points).take(usize::from(*len)) {
+            *dst = *p;
+        }
+        self.built_rot_a = *built_rot_a;
+        self.built_rot_b = *built_rot_b;
+        self.normal_local = *normal_local;
+        self.built_pose = *built_pose;
     }
 
     /// The points in use.
@@ -423,7 +534,7 @@ pub(crate) fn insert_pairs<const N: usize, const C: usize>(
             let (Some(src), Some(dst)) = (low.get(old_at), high.first_mut()) else {
                 break;
             };
-            *dst = *src;
+            dst.copy_from(src);
         }
         if new_at == 0 {
             // The old contacts below `write` are already in place.
@@ -490,7 +601,7 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
             // (`write < read`, so the two are in different halves of the split).
             if let Some((low, high)) = slots.split_at_mut_checked(read) {
                 if let (Some(dst), Some(src)) = (low.get_mut(write), high.first()) {
-                    *dst = *src;
+                    dst.copy_from(src);
                 }
             }
         }
@@ -1478,6 +1589,85 @@ mod tests {
         ];
         assert!(ends.iter().all(|&e| e <= 24), "{ends:?}");
         assert_eq!(size_of::<Contact>(), 344);
+    }
+
+    /// `copy_from` gives every field of the source and its first `len` points, and
+    /// leaves the point slots past them as they were, for every point count; equality
+    /// reads the points in use only.
+    #[test]
+    fn copy_from_copies_every_field_and_the_points_in_use() {
+        let mut rng = crate::rng::SplitMix64::new(23);
+        let mut v = || rng.range(-5.0, 5.0);
+        let mut filled = |seed: u32| {
+            let mut c = Contact {
+                a: seed,
+                b: seed + 1,
+                sub: seed + 2,
+                len: 0,
+                sensor: true,
+                touching: true,
+                sticking: true,
+                hit_due: true,
+                new_parts: 3,
+                sat_cache: PairCache {
+                    axis: crate::collide::SatAxis::Edges(seed as u16, 7),
+                },
+                normal: Vec3::new(v(), v(), v()),
+                material: Material {
+                    restitution: v(),
+                    static_friction: v(),
+                    kinetic_friction: v(),
+                    rolling_resistance: v(),
+                    twist_friction: v(),
+                },
+                friction_impulse: Vec3::new(v(), v(), v()),
+                twist_impulse: v(),
+                built_margin: v(),
+                apart_gap: v(),
+                points: [ContactPoint::default(); 4],
+                built_rot_a: Quat::from_xyzw(v(), v(), v(), v()),
+                built_rot_b: Quat::from_xyzw(v(), v(), v(), v()),
+                normal_local: Vec3::new(v(), v(), v()),
+                built_pose: Iso::new(
+                    Vec3::new(v(), v(), v()),
+                    Quat::from_xyzw(v(), v(), v(), v()),
+                ),
+            };
+            for (j, p) in c.points.iter_mut().enumerate() {
+                *p = ContactPoint {
+                    id: u64::from(seed) * 10 + j as u64,
+                    local_a: Vec3::new(v(), v(), v()),
+                    local_b: Vec3::new(v(), v(), v()),
+                    separation: v(),
+                    normal_impulse: v(),
+                    approach_speed: v(),
+                };
+            }
+            c
+        };
+        for len in 0..=4u8 {
+            let mut src = filled(100);
+            src.len = len;
+            let mut dst = filled(200);
+            dst.len = 4 - len;
+            let before = dst;
+            dst.copy_from(&src);
+            let mut want = src;
+            let n = usize::from(len);
+            want.points[n..].copy_from_slice(&before.points[n..]);
+            assert_eq!(dst, want, "len {len}");
+            assert_eq!(dst.points, want.points, "len {len}");
+            // Equal by meaning: the slots past `len` are not compared, the others are.
+            assert_eq!(dst, src, "len {len}");
+            if let Some(p) = dst.points.get_mut(n) {
+                p.normal_impulse += 1.0;
+                assert_eq!(dst, src, "len {len}");
+            }
+            if let Some(p) = dst.points.get_mut(n.wrapping_sub(1)) {
+                p.normal_impulse += 1.0;
+                assert_ne!(dst, src, "len {len}");
+            }
+        }
     }
 
     fn point(id: u64, local_a: Vec3, local_b: Vec3, impulse: f32) -> ContactPoint {

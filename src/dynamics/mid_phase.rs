@@ -520,7 +520,7 @@ fn listed<const N: usize>(
 fn move_down(slots: &mut [Contact], from: usize, to: usize) {
     if let Some((low, high)) = slots.split_at_mut_checked(from) {
         if let (Some(dst), Some(src)) = (low.get_mut(to), high.first()) {
-            *dst = *src;
+            dst.copy_from(src);
         }
     }
 }
@@ -530,7 +530,7 @@ fn move_down(slots: &mut [Contact], from: usize, to: usize) {
 fn move_up(slots: &mut [Contact], from: usize, to: usize) {
     if let Some((low, high)) = slots.split_at_mut_checked(to) {
         if let (Some(src), Some(dst)) = (low.get(from), high.first_mut()) {
-            *dst = *src;
+            dst.copy_from(src);
         }
     }
 }
