@@ -671,9 +671,11 @@ fn finalize<const N: usize, const C: usize>(
 #[inline]
 pub(crate) fn clamp_length(v: Vec3, max: f32) -> Vec3 {
     // The common case first: a finite vector within the limit comes back as it is (what
-    // the full path below returns for it too).
+    // the full path below returns for it too). Below a finite `max²`, `|v|²` is finite
+    // itself: the one test on `max²` does not depend on `v` and leaves a loop over bodies.
     let l2 = v.length_squared();
-    if l2 <= max * max && l2.is_finite() {
+    let max2 = max * max;
+    if l2 <= max2 && max2 < f32::INFINITY {
         return v;
     }
     if !v.is_finite() {
@@ -1261,5 +1263,15 @@ mod tests {
             clamp_length(Vec3::new(0.0, -max, 0.0), max),
             Vec3::new(0.0, -max, 0.0)
         );
+        // A limit whose square is infinite: finite vectors unchanged (even those whose
+        // square is infinite too), non-finite ones zero.
+        for limit in [f32::MAX, f32::INFINITY] {
+            for v in [Vec3::new(3.0e38, -3.0e38, 1.0), Vec3::new(0.5, -2.0, 7.0)] {
+                assert_eq!(clamp_length(v, limit), v);
+            }
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                assert_eq!(clamp_length(Vec3::new(bad, 1.0, 0.0), limit), Vec3::ZERO);
+            }
+        }
     }
 }
