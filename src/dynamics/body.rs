@@ -350,6 +350,9 @@ pub(crate) struct Body<'a> {
     /// Pose of the body frame (the shape's frame) in the world: read through
     /// [`Body::pose`], changed only through [`Body::place`] (which keeps `center_world`).
     pose: Iso,
+    /// `Mat3::from_quat(pose.rotation)`, kept with the pose (every write goes through
+    /// [`Body::place`]): the solver's gather and the shape's box read it every step.
+    rot: Mat3,
     /// Centre of mass in the body frame.
     pub center_local: Vec3,
     /// Centre of mass in the world (m), `pose.transform_point(center_local)`: kept by
@@ -496,6 +499,7 @@ impl<'a> Body<'a> {
                 + ((c.x + c.y) + c.z),
             kind: d.kind,
             pose,
+            rot: Mat3::from_quat(pose.rotation),
             center_local,
             center_world: pose.transform_point(center_local),
             linear_velocity: if still { Vec3::ZERO } else { d.linear_velocity },
@@ -540,7 +544,7 @@ impl<'a> Body<'a> {
     /// sphere about the body's origin (a hull's exact box is a pass over its vertices).
     pub fn refresh_bounds(&mut self) {
         self.bounds = if self.exact_bounds() {
-            self.shape.aabb(&self.pose)
+            self.shape.aabb_turned(&self.pose, &self.rot)
         } else {
             self.sphere_bounds()
         };
@@ -595,10 +599,23 @@ impl<'a> Body<'a> {
         &self.pose
     }
 
+    /// The pose's rotation as a matrix, `Mat3::from_quat(pose().rotation)`.
+    #[inline(always)]
+    pub fn rotation_matrix(&self) -> &Mat3 {
+        &self.rot
+    }
+
     /// Put the body frame at `pose`, its centre of mass with it.
     #[inline]
     pub fn place(&mut self, pose: Iso) {
+        self.place_turned(pose, &Mat3::from_quat(pose.rotation));
+    }
+
+    /// [`Body::place`] given `r = Mat3::from_quat(pose.rotation)`.
+    #[inline]
+    fn place_turned(&mut self, pose: Iso, r: &Mat3) {
         self.pose = pose;
+        self.rot = *r;
         self.center_world = pose.transform_point(self.center_local);
     }
 
@@ -606,7 +623,8 @@ impl<'a> Body<'a> {
     #[inline]
     pub fn update_inertia(&mut self) {
         if self.is_dynamic() {
-            self.update_inertia_turned(&Mat3::from_quat(self.pose.rotation));
+            let r = self.rot;
+            self.update_inertia_turned(&r);
         }
     }
 
@@ -642,7 +660,7 @@ impl<'a> Body<'a> {
 
     /// [`Body::set_center_pose`] given `r = Mat3::from_quat(q)` (the solver keeps it).
     pub fn set_center_pose_turned(&mut self, c: Vec3, q: Quat, r: &Mat3) {
-        self.place(Iso::new(c - q.rotate(self.center_local), q));
+        self.place_turned(Iso::new(c - q.rotate(self.center_local), q), r);
         self.update_inertia_turned(r);
     }
 }
@@ -651,6 +669,72 @@ impl<'a> Body<'a> {
 mod tests {
     use super::*;
     use crate::shape::ConvexHull;
+
+    /// Every body's kept rotation matrix is `Mat3::from_quat` of its rotation, bit for
+    /// bit: at creation, after steps of the solver (which hands its own matrix over),
+    /// after projection and continuous collision moved bodies, after a teleport and
+    /// after a snapshot is restored.
+    #[test]
+    fn the_kept_rotation_matrix_is_the_rotations_to_the_bit() {
+        use crate::{World, WorldConfig};
+        fn check(world: &World<'_, 64, 512, 64>, when: &str) -> usize {
+            let mut n = 0;
+            for (_, b) in world.bodies.iter() {
+                let want = Mat3::from_quat(b.pose().rotation);
+                let got = b.rotation_matrix();
+                for (g, w) in [(got.x, want.x), (got.y, want.y), (got.z, want.z)] {
+                    assert!(
+                        g.x.to_bits() == w.x.to_bits()
+                            && g.y.to_bits() == w.y.to_bits()
+                            && g.z.to_bits() == w.z.to_bits(),
+                        "{when}: {got:?} against {want:?}"
+                    );
+                }
+                n += 1;
+            }
+            n
+        }
+        let cube = Shape::cuboid(Vec3::new(0.5, 0.3, 0.4)).unwrap();
+        let ball = Shape::sphere(0.3).unwrap();
+        let mut world: std::boxed::Box<World<'_, 64, 512, 64>> =
+            std::boxed::Box::new(World::with_config(WorldConfig::DEFAULT).unwrap());
+        let ground = Shape::cuboid(Vec3::new(20.0, 0.5, 20.0)).unwrap();
+        world
+            .add(BodyDesc::fixed(ground).position(Vec3::new(0.0, -0.5, 0.0)))
+            .unwrap();
+        let mut rng = crate::rng::SplitMix64::new(17);
+        let mut handles = std::vec::Vec::new();
+        for i in 0..24 {
+            let shape = if i % 3 == 0 { ball } else { cube };
+            let desc = BodyDesc::dynamic(shape)
+                .position(Vec3::new(
+                    rng.range(-2.0, 2.0),
+                    0.4 + 0.5 * i as f32,
+                    rng.range(-2.0, 2.0),
+                ))
+                .rotation(rng.rotation())
+                .angular_velocity(rng.unit_vector() * rng.range(0.0, 8.0))
+                .ccd(i % 5 == 0);
+            handles.push(world.add(desc).unwrap());
+        }
+        assert_eq!(check(&world, "created"), 25);
+        for _ in 0..90 {
+            world.step();
+        }
+        check(&world, "after 90 steps");
+        let moved = handles[3];
+        world
+            .set_pose(moved, Iso::new(Vec3::new(0.0, 3.0, 0.0), rng.rotation()))
+            .unwrap();
+        check(&world, "after a teleport");
+        let mut buf = std::vec![0u8; world.snapshot_len()];
+        world.snapshot(&mut buf).unwrap();
+        for _ in 0..30 {
+            world.step();
+        }
+        world.restore(&buf).unwrap();
+        check(&world, "after a restore");
+    }
 
     #[test]
     fn a_body_keeps_its_shapes_bounding_radius_to_the_bit() {

@@ -590,7 +590,7 @@ fn gather<const N: usize, const C: usize>(
             v: b.linear_velocity,
             w: b.angular_velocity,
             q: b.pose().rotation,
-            rot: Mat3::from_quat(b.pose().rotation),
+            rot: *b.rotation_matrix(),
             slot: slot as u32,
             ..SolverBody::ZERO
         };

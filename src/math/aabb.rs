@@ -27,13 +27,19 @@ impl Aabb {
     /// The box around a local box of half-extents `half` (centred on the local origin)
     /// under the pose `iso`: half-extents `|R| half`.
     pub fn from_local_box(iso: &Iso, half: Vec3) -> Aabb {
-        let r = super::Mat3::from_quat(iso.rotation);
+        Aabb::from_local_box_turned(iso.position, &super::Mat3::from_quat(iso.rotation), half)
+    }
+
+    /// [`Aabb::from_local_box`] given the rotation as the matrix `r`, the box centred at
+    /// `center`.
+    #[inline]
+    pub(crate) fn from_local_box_turned(center: Vec3, r: &super::Mat3, half: Vec3) -> Aabb {
         let h = Vec3::new(
             r.row(0).abs().dot(half),
             r.row(1).abs().dot(half),
             r.row(2).abs().dot(half),
         );
-        Aabb::from_center_half(iso.position, h)
+        Aabb::from_center_half(center, h)
     }
 
     /// The box around this box moved by `iso` (a box given in some frame, bounded in the

@@ -476,7 +476,11 @@ impl ConvexHull {
     /// the quaternion (a fifth of the work for 16 vertices); the box differs from the
     /// turned vertices' box by rounding only (a few units in the last place).
     pub(crate) fn aabb(&self, pose: &Iso) -> Aabb {
-        let r = Mat3::from_quat(pose.rotation);
+        self.aabb_turned(pose, &Mat3::from_quat(pose.rotation))
+    }
+
+    /// [`ConvexHull::aabb`] given `r = Mat3::from_quat(pose.rotation)`.
+    pub(crate) fn aabb_turned(&self, pose: &Iso, r: &Mat3) -> Aabb {
         let (x0, x1) = self.dot_range(r.row(0));
         let (y0, y1) = self.dot_range(r.row(1));
         let (z0, z1) = self.dot_range(r.row(2));

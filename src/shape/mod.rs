@@ -584,6 +584,17 @@ impl<'a> Shape<'a> {
         }
     }
 
+    /// [`Shape::aabb`] given `r = Mat3::from_quat(pose.rotation)`: the same box, without
+    /// forming the matrix again for a cuboid or a hull.
+    #[inline]
+    pub(crate) fn aabb_turned(&self, pose: &Iso, r: &crate::math::Mat3) -> Aabb {
+        match self {
+            Shape::Cuboid(b) => Aabb::from_local_box_turned(pose.position, r, b.half_extents),
+            Shape::Hull(h) => h.aabb_turned(pose, r),
+            _ => self.aabb(pose),
+        }
+    }
+
     /// Largest distance from the local origin to any point of the shape (m); for a
     /// half-space, [`HALF_SPACE_EXTENT`].
     pub fn bounding_radius(&self) -> f32 {
