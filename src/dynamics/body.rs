@@ -622,10 +622,8 @@ impl<'a> Body<'a> {
     /// Refresh `R I⁻¹ Rᵀ` after the rotation changed.
     #[inline]
     pub fn update_inertia(&mut self) {
-        if self.is_dynamic() {
-            let r = self.rot;
-            self.update_inertia_turned(&r);
-        }
+        let r = self.rot;
+        self.update_inertia_turned(&r);
     }
 
     /// [`Body::update_inertia`] given `r`, the pose's rotation as a matrix.
@@ -672,8 +670,8 @@ mod tests {
 
     /// Every body's kept rotation matrix is `Mat3::from_quat` of its rotation, bit for
     /// bit: at creation, after steps of the solver (which hands its own matrix over),
-    /// after projection and continuous collision moved bodies, after a teleport and
-    /// after a snapshot is restored.
+    /// after `set_center_pose` (what projection and continuous collision move bodies
+    /// with), after a teleport and after a snapshot is restored.
     #[test]
     fn the_kept_rotation_matrix_is_the_rotations_to_the_bit() {
         use crate::{World, WorldConfig};
@@ -722,6 +720,11 @@ mod tests {
             world.step();
         }
         check(&world, "after 90 steps");
+        for (_, b) in world.bodies.iter_mut() {
+            let c = b.world_center() + Vec3::new(0.0, 0.01, 0.0);
+            b.set_center_pose(c, rng.rotation());
+        }
+        check(&world, "after set_center_pose");
         let moved = handles[3];
         world
             .set_pose(moved, Iso::new(Vec3::new(0.0, 3.0, 0.0), rng.rotation()))

@@ -454,8 +454,7 @@ pub(crate) fn update_fat_boxes<const N: usize>(bodies: &mut Pool<Body<'_>, N>, c
                 .expanded(cfg.speculative_margin)
         };
         // The shape's box now: the narrow phase's bounds and the cover's start.
-        // `motion.pose` is the body's pose: its matrix is kept.
-        let now = body.shape.aabb_turned(&motion.pose, body.rotation_matrix());
+        let now = body.shape.aabb_turned(body.pose(), body.rotation_matrix());
         body.refresh_bounds_from(now);
         // Most bodies stay well inside their enlarged box: a cheap cover of the movement
         // bounds settles it (the same answer: the bounds lie inside the cover).
