@@ -256,6 +256,26 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         &self.events
     }
 
+    /// Empty the world where it lies: afterwards it is what [`World::new`] returns (the
+    /// default config, no body, no contact, no event, step 0, every slot's generation 0),
+    /// and it steps, hashes and snapshots as a new world does, to the bit. Unlike
+    /// `*world = World::new()`, it builds no second world on the stack first: firmware
+    /// that keeps its world in a `static` starts a new round or level with it. A handle
+    /// from before names the body that takes its slot next, as in a new world.
+    pub fn reset(&mut self) {
+        self.config = WorldConfig::DEFAULT;
+        self.bodies.reset();
+        self.broad.reset();
+        self.pairs.clear();
+        self.contacts.clear();
+        self.solver.reset();
+        self.events.clear();
+        self.islands.fill(0);
+        self.step_count = 0;
+        self.report = StepReport::default();
+        self.quiet = false;
+    }
+
     /// Number of steps taken.
     pub fn step_count(&self) -> u64 {
         self.step_count

@@ -174,6 +174,13 @@ impl<const N: usize> AabbTree<N> {
         }
     }
 
+    /// Back to [`AabbTree::new`]'s state where it lies: [`AabbTree::clear`], and every
+    /// node free as a new tree's.
+    pub fn reset(&mut self) {
+        self.clear();
+        self.nodes.fill([Node::FREE; 2]);
+    }
+
     /// Remove every proxy. Proxy ids handed out before are invalid afterwards.
     pub fn clear(&mut self) {
         self.root = NULL;

@@ -148,6 +148,17 @@ impl<const N: usize> BroadPhase<N> {
         }
     }
 
+    /// Back to [`BroadPhase::new`]'s state where it lies.
+    pub fn reset(&mut self) {
+        self.tree.reset();
+        self.proxies.fill(NULL);
+        self.stale = false;
+        #[cfg(test)]
+        {
+            self.work = 0;
+        }
+    }
+
     /// Forget the tree (the bodies were replaced, as by a restore): the next search
     /// builds it again from the bodies' enlarged boxes, in slot order.
     pub fn invalidate(&mut self) {

@@ -37,6 +37,15 @@ impl<T: Copy, const N: usize> Pool<T, N> {
         }
     }
 
+    /// Back to [`Pool::new`]'s state where it lies: every slot free, every generation 0
+    /// (no copy of the pool on the stack).
+    pub fn reset(&mut self) {
+        self.slots.fill(None);
+        self.generations.fill(0);
+        self.len = 0;
+        self.high = 0;
+    }
+
     /// Number of used slots.
     #[inline]
     pub fn len(&self) -> usize {

@@ -929,7 +929,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         // Bodies with parts (mesh, compound): their pairs are records and part contacts.
         let mut composite = [false; BODIES];
         if apply {
-            self.bodies = super::pool::Pool::new();
+            self.bodies.reset();
             self.config = config;
             self.step_count = step_count;
         }

@@ -145,6 +145,17 @@ impl<const N: usize, const C: usize> Solver<N, C> {
         }
     }
 
+    /// Back to [`Solver::new`]'s state where it lies.
+    pub fn reset(&mut self) {
+        self.bodies.clear();
+        self.index.fill(NONE);
+        self.store.clear();
+        self.heavy = false;
+        self.marks.fill(0);
+        self.slot_of.fill(NO_SLOT);
+        self.radix.fill((0, 0));
+    }
+
     /// The solver body of slot `slot`, if it has one.
     #[inline]
     pub fn body_of_slot(&self, slot: u32) -> Option<&SolverBody> {
