@@ -10,7 +10,7 @@
 //! ray casts), hull building, GJK distance and intersection, EPA penetration, contact
 //! manifolds, time of impact and movement bounds, and the world: add with every shape
 //! and option, every setter, step and traced step, ray casts and overlap queries,
-//! checksums, snapshot and restore (valid and corrupt), remove, the standard scenes;
+//! checksums, snapshot and restore (valid and corrupt), remove, reset, the standard scenes;
 //! triangle meshes, height fields and compounds built and stepped in a world (the mid
 //! phase), with ray casts, overlaps and a snapshot round trip.
 #![no_std]
@@ -225,7 +225,11 @@ fn world(w: &mut W, shapes: &[Shape<'static>], hulls: &'static [ConvexHull]) -> 
         let _ = w.sleep(*h);
         let _ = w.remove(*h);
     }
-    acc + w.body_count() as u32 + w.step_count() as u32
+    acc += w.body_count() as u32 + w.step_count() as u32;
+    // Emptied where it lies, then stepped as a new world.
+    w.reset();
+    w.step();
+    acc + w.step_count() as u32
 }
 
 /// The standard scenes: built into a world too small for most of them (the pool-full

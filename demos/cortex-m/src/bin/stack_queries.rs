@@ -1,6 +1,7 @@
 //! The stack each query needs: for every stateless query and for a world step, paint the
 //! free stack, run the query once on inputs the optimiser cannot see
-//! (`core::hint::black_box`), and print the peak (`src/stack.rs`) as
+//! (`core::hint::black_box`), and print the peak below the painting frame
+//! (`src/stack.rs`, `peak_below_painter`: the query's own need) as
 //!
 //! ```text
 //! stack <query> <bytes> bytes
@@ -31,7 +32,11 @@ type SmallWorld = World<'static, 16, 64, 16>;
 fn measure<R>(name: &str, f: impl FnOnce() -> R) {
     let painted = stack::paint();
     black_box(call(f));
-    hprintln!("stack {} {} bytes", name, stack::peak_use(&painted));
+    hprintln!(
+        "stack {} {} bytes",
+        name,
+        stack::peak_below_painter(&painted)
+    );
 }
 
 /// `f()` in a frame of its own, below the painting frame's stack pointer (inlined into
@@ -137,7 +142,7 @@ fn run() -> Result<(), carom::Error> {
     for _ in 0..90 {
         let painted = stack::paint();
         black_box(call(|| world.step()));
-        deepest = deepest.max(stack::peak_use(&painted));
+        deepest = deepest.max(stack::peak_below_painter(&painted));
     }
     hprintln!("stack world_step_13_bodies {} bytes", deepest);
     Ok(())
