@@ -868,15 +868,15 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
                 .copied()
                 .unwrap_or_default()
         };
-        // What the choice reads of each point: its depth and its place on A.
-        let mut reads: HVec<(f32, Vec3), { MAX_PAIR_PARTS * 4 }> = HVec::new();
-        for key in &points {
-            let p = point(key);
-            // Cannot fail: one entry per point.
-            let _ = reads.push((p.separation, p.local_a));
-        }
+        // What the choice reads of each point: its depth and its place on A, read where
+        // the point lies (a copy of them all would be 8 KiB of stack: a Cortex-M step's
+        // deepest frame).
+        let read = |i: usize| {
+            let p = points.get(i).map(point).unwrap_or_default();
+            (p.separation, p.local_a)
+        };
         let mut keep: HVec<ContactPoint, 4> = HVec::new();
-        for &i in &choose_four(&reads, slop) {
+        for &i in &choose_four(points.len(), read, slop) {
             if let Some(key) = points.get(i) {
                 // Cannot fail: at most four.
                 let _ = keep.push(point(key));
@@ -899,9 +899,9 @@ pub(crate) fn merge_patches(group: &mut [Contact], slop: f32) {
     }
 }
 
-/// The (at most) four points of a patch [`merge_patches`] keeps, as their indices in
-/// `points` (each point's separation and its place in A's frame).
-fn choose_four(points: &[(f32, Vec3)], slop: f32) -> HVec<usize, 4> {
+/// The (at most) four points of a patch [`merge_patches`] keeps, as their indices among
+/// its `count` points; `read(i)` gives point `i`'s separation and its place in A's frame.
+fn choose_four(count: usize, read: impl Fn(usize) -> (f32, Vec3), slop: f32) -> HVec<usize, 4> {
     let mut keep: HVec<usize, 4> = HVec::new();
     let mut at: HVec<Vec3, 4> = HVec::new();
     let area = |u: Vec3, v: Vec3, w: Vec3| scalar::sqrt((v - u).cross(w - u).length_squared());
@@ -909,11 +909,11 @@ fn choose_four(points: &[(f32, Vec3)], slop: f32) -> HVec<usize, 4> {
     // slop of the deepest (on a flat patch, a corner of the footprint).
     let mut deepest = f32::INFINITY;
     let mut sum = Vec3::ZERO;
-    for &(separation, x) in points {
+    for (separation, x) in (0..count).map(&read) {
         deepest = scalar::min(deepest, separation);
         sum += x;
     }
-    let centroid = sum * (1.0 / points.len().max(1) as f32);
+    let centroid = sum * (1.0 / count.max(1) as f32);
     for _ in 0..4 {
         let score = |separation: f32, x: Vec3| -> f32 {
             match at.as_slice() {
@@ -925,7 +925,7 @@ fn choose_four(points: &[(f32, Vec3)], slop: f32) -> HVec<usize, 4> {
             }
         };
         let mut best: Option<(usize, Vec3, f32)> = None;
-        for (i, &(separation, x)) in points.iter().enumerate() {
+        for (i, (separation, x)) in (0..count).map(&read).enumerate() {
             // A point on top of a kept one adds nothing (nor does a kept one).
             if at.iter().any(|k| (x - *k).length_squared() <= slop * slop) {
                 continue;
