@@ -263,17 +263,31 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// that keeps its world in a `static` starts a new round or level with it. A handle
     /// from before names the body that takes its slot next, as in a new world.
     pub fn reset(&mut self) {
-        self.config = WorldConfig::DEFAULT;
-        self.bodies.reset();
-        self.broad.reset();
-        self.pairs.clear();
-        self.contacts.clear();
-        self.solver.reset();
-        self.events.clear();
-        self.islands.fill(0);
-        self.step_count = 0;
-        self.report = StepReport::default();
-        self.quiet = false;
+        // Every field named: a new one cannot be left out.
+        let World {
+            config,
+            bodies,
+            broad,
+            pairs,
+            contacts,
+            solver,
+            events,
+            islands,
+            step_count,
+            report,
+            quiet,
+        } = self;
+        *config = WorldConfig::DEFAULT;
+        bodies.reset();
+        broad.reset();
+        pairs.clear();
+        contacts.clear();
+        solver.reset();
+        events.clear();
+        islands.fill(0);
+        *step_count = 0;
+        *report = StepReport::default();
+        *quiet = false;
     }
 
     /// Number of steps taken.

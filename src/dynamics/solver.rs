@@ -145,15 +145,26 @@ impl<const N: usize, const C: usize> Solver<N, C> {
         }
     }
 
-    /// Back to [`Solver::new`]'s state where it lies.
+    /// Back to [`Solver::new`]'s state where it lies. Every field is named, so a new one
+    /// cannot be left out.
     pub fn reset(&mut self) {
-        self.bodies.clear();
-        self.index.fill(NONE);
-        self.store.clear();
-        self.heavy = false;
-        self.marks.fill(0);
-        self.slot_of.fill(NO_SLOT);
-        self.radix.fill((0, 0));
+        let Solver {
+            bodies,
+            index,
+            store,
+            heavy,
+            marks,
+            slot_of,
+            radix,
+        } = self;
+        bodies.clear();
+        index.fill(NONE);
+        // Room for no group: no slot, every count and flag as new (cannot fail).
+        let _ = store.reset(0);
+        *heavy = false;
+        marks.fill(0);
+        slot_of.fill(NO_SLOT);
+        radix.fill((0, 0));
     }
 
     /// The solver body of slot `slot`, if it has one.

@@ -233,16 +233,6 @@ impl<const C: usize> WideStore<C> {
         }
     }
 
-    /// Back to [`WideStore::new`]'s state where it lies: no slot, no group.
-    pub fn clear(&mut self) {
-        self.main.clear();
-        self.extra.clear();
-        self.groups = 0;
-        self.overflow_from = 0;
-        self.deep = None;
-        self.bouncy = false;
-    }
-
     /// Room for `groups` groups, every lane marked empty (no contact, no points); false
     /// when the store cannot hold them. Slots kept from the last step keep their old
     /// numbers: a lane is written whole when a constraint is stored in it, and an empty
