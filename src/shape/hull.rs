@@ -212,7 +212,8 @@ impl ConvexHull {
         let eps = validate(points)? as f64;
         let simplex = initial_simplex(points, eps)?;
         let mut build_eps = eps;
-        let mut builder = Builder::new(points, eps, build_eps, simplex)?;
+        let mut builder = Builder::new(points, eps);
+        builder.restart(build_eps, simplex)?;
         builder.run()?;
         // A point the builder had to leave out (see `Builder::run`) can sit far outside
         // when a small feature meets long, nearly coplanar faces: the cone to it would
@@ -233,7 +234,9 @@ impl ConvexHull {
             }
             build_eps = finer;
         }
-        builder.finish()
+        let mut hull = EMPTY_HULL;
+        builder.finish(&mut hull)?;
+        Ok(hull)
     }
 
     /// The vertices.
@@ -958,10 +961,12 @@ struct Builder<'p> {
     /// The hull's tolerance (m), [`ConvexHull::tolerance`]: faces merge within it.
     merge_eps: f64,
     tris: [Tri; MAX_WORK_TRIS],
-    /// Owning triangle of each point, or [`NONE`] / [`PENDING`].
+    /// Owning triangle of each point, or [`NONE`] / [`PENDING`]. An owner is always a
+    /// live triangle with the plane it had when it took the point (a triangle's points
+    /// wait as [`PENDING`] before it is retired, and a slot gets a new plane only when
+    /// free), so the point's height above it is formed again where it is needed rather
+    /// than kept (8 KiB of `f64`s on the stack).
     owner: [u8; MAX_HULL_INPUT_POINTS],
-    /// Height of each outside point above its owner (m).
-    height: [f64; MAX_HULL_INPUT_POINTS],
     /// Number of live triangles using each point as a corner.
     degree: [u8; MAX_HULL_INPUT_POINTS],
     /// Points with a non-zero degree: the current hull's vertices.
@@ -970,27 +975,21 @@ struct Builder<'p> {
 }
 
 impl<'p> Builder<'p> {
-    /// A builder at build tolerance `eps` over the tetrahedron `simplex` (see
-    /// [`Builder::restart`]), whose faces will merge within `merge_eps`.
-    fn new(
-        points: &'p [Vec3],
-        merge_eps: f64,
-        eps: f64,
-        simplex: [u16; 4],
-    ) -> Result<Builder<'p>, Error> {
-        let mut b = Builder {
+    /// An empty builder whose faces will merge within `merge_eps`: [`Builder::restart`]
+    /// starts it. Infallible and filled by `restart`, so the caller's local is the only
+    /// copy (a `Result<Builder>` and array literals were each a 16 KiB copy on the stack,
+    /// most of `ConvexHull::new`'s frame on a Cortex-M).
+    fn new(points: &'p [Vec3], merge_eps: f64) -> Builder<'p> {
+        Builder {
             points,
-            eps,
+            eps: merge_eps,
             merge_eps,
             tris: [DEAD_TRI; MAX_WORK_TRIS],
             owner: [NONE; MAX_HULL_INPUT_POINTS],
-            height: [0.0; MAX_HULL_INPUT_POINTS],
             degree: [0; MAX_HULL_INPUT_POINTS],
             vertex_count: 0,
             reduced: false,
-        };
-        b.restart(eps, simplex)?;
-        Ok(b)
+        }
     }
 
     /// Start again, in place, at build tolerance `eps`: the tetrahedron `[a, b, c, d]`
@@ -998,10 +997,11 @@ impl<'p> Builder<'p> {
     /// face it is farthest above.
     fn restart(&mut self, eps: f64, simplex: [u16; 4]) -> Result<(), Error> {
         self.eps = eps;
-        self.tris = [DEAD_TRI; MAX_WORK_TRIS];
-        self.owner = [NONE; MAX_HULL_INPUT_POINTS];
-        self.height = [0.0; MAX_HULL_INPUT_POINTS];
-        self.degree = [0; MAX_HULL_INPUT_POINTS];
+        // Filled where they lie: an assigned array literal can be built on the stack
+        // first and copied.
+        self.tris.fill(DEAD_TRI);
+        self.owner.fill(NONE);
+        self.degree.fill(0);
         self.vertex_count = 0;
         self.reduced = false;
         let [a, bb, c, d] = simplex;
@@ -1048,9 +1048,8 @@ impl<'p> Builder<'p> {
                 }
             }
         }
-        if let (Some(o), Some(h)) = (self.owner.get_mut(i), self.height.get_mut(i)) {
+        if let Some(o) = self.owner.get_mut(i) {
             *o = best.0;
-            *h = best.1;
         }
     }
 
@@ -1163,14 +1162,13 @@ impl<'p> Builder<'p> {
         let mut best = None;
         let mut best_h = 0.0f64;
         let n = self.points.len();
-        for (i, (&o, &h)) in self
-            .owner
-            .iter()
-            .zip(self.height.iter())
-            .take(n)
-            .enumerate()
-        {
-            if (o as usize) < MAX_WORK_TRIS && h > best_h {
+        for (i, &o) in self.owner.iter().enumerate().take(n) {
+            // Its height as `assign` formed it (the owner's plane has not changed).
+            let Some(t) = self.tris.get(o as usize) else {
+                continue;
+            };
+            let h = t.height(point_at(self.points, i));
+            if h > best_h {
                 best = Some(i);
                 best_h = h;
             }
@@ -1409,8 +1407,12 @@ impl<'p> Builder<'p> {
     // Stage 3: faces.
     // -----------------------------------------------------------------------------------
 
-    /// Turn the triangle mesh into the hull's polygon faces and fill a [`ConvexHull`].
-    fn finish(mut self) -> Result<ConvexHull, Error> {
+    /// Turn the triangle mesh into the hull's polygon faces and fill `hull` (an
+    /// [`EMPTY_HULL`]; unspecified after an error). Out of line, with the hull the
+    /// caller's: the polygons' scratch is on the stack only while they are made, and the
+    /// hull is not built in a local and copied out.
+    #[inline(never)]
+    fn finish(&mut self, hull: &mut ConvexHull) -> Result<(), Error> {
         self.eps = self.merge_eps;
         // Between two planes 2 eps apart: within eps of the plane between them.
         if self.width() <= 2.0 * self.eps {
@@ -1420,7 +1422,6 @@ impl<'p> Builder<'p> {
         self.merge_coplanar(&mut polys)?;
         self.drop_flat_vertices(&mut polys);
 
-        let mut hull = EMPTY_HULL;
         hull.tolerance = self.eps as f32;
         hull.reduced = self.reduced;
         // Vertices: the points still used, in input order; `owner` now maps an input index
@@ -1471,13 +1472,13 @@ impl<'p> Builder<'p> {
             // Start at the lowest-index vertex.
             let first = lowest_at(corners.iter().copied());
             crate::sort::rotate_left(corners, first);
-            emit_split(&mut hull, corners, polys.plane(k))?;
+            emit_split(hull, corners, polys.plane(k))?;
         }
 
         if hull.face_count < 4 || hull.vertex_count < 4 {
             return Err(Error::Hull(HullError::Coplanar));
         }
-        link_edges(&mut hull);
+        link_edges(hull);
         // Not seen after the width test, but a hull without volume is flat.
         let (_, centroid, _) = hull
             .volume_integrals()
@@ -1487,7 +1488,7 @@ impl<'p> Builder<'p> {
         hull.well_formed_edges = hull.edges_run_along_faces();
         hull.inner_radius = hull.centroid_depth();
         hull.outer_radius = hull.farthest_vertex();
-        Ok(hull)
+        Ok(())
     }
 
     /// The mesh's smallest width over its triangle normals: for each triangle, the depth
