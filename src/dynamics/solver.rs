@@ -48,6 +48,7 @@ use super::pool::Pool;
 use super::support;
 use super::wide::{self, WideStore};
 use crate::config::WorldConfig;
+use crate::math::lanes::{F4, M4, V4};
 use crate::math::{scalar, Mat3, Quat, Vec3};
 
 /// Index of "no solver body": a static or sleeping body (zero velocity, infinite mass).
@@ -657,15 +658,88 @@ fn integrate_velocities(bodies: &mut [SolverBody], cfg: &WorldConfig) {
 
 /// The speed limits (the solve just ran and may have passed them; a non-finite
 /// velocity becomes zero), then `Δp += v h`, `q ← normalise(q + ½ h (ω, 0) q)`,
-/// `R = R(q)`.
+/// `R = R(q)`: four bodies at a time in lanes ([`integrate_four`]) where they can be,
+/// one at a time otherwise. The same bits either way.
 fn integrate_positions(bodies: &mut [SolverBody], h: f32, cfg: &WorldConfig) {
-    for b in bodies.iter_mut() {
-        b.v = clamp_length(b.v, cfg.max_linear_speed);
-        b.w = clamp_length(b.w, cfg.max_angular_speed);
-        b.dp += b.v * h;
-        b.q = b.q.integrate(b.w, h);
-        b.rot = Mat3::from_quat(b.q);
+    let mut fours = bodies.chunks_exact_mut(4);
+    for four in &mut fours {
+        if !integrate_four(four, h, cfg) {
+            four.iter_mut().for_each(|b| integrate_one(b, h, cfg));
+        }
     }
+    for b in fours.into_remainder() {
+        integrate_one(b, h, cfg);
+    }
+}
+
+/// [`integrate_positions`] for one body.
+#[inline]
+fn integrate_one(b: &mut SolverBody, h: f32, cfg: &WorldConfig) {
+    b.v = clamp_length(b.v, cfg.max_linear_speed);
+    b.w = clamp_length(b.w, cfg.max_angular_speed);
+    b.dp += b.v * h;
+    b.q = b.q.integrate(b.w, h);
+    b.rot = Mat3::from_quat(b.q);
+}
+
+/// [`integrate_one`] for four bodies side by side, each lane the same operations in the
+/// same order: `Quat::integrate` (its Hamilton product and `Quat::normalize`, whose
+/// three outcomes are lane selects) and `Mat3::from_quat` (`M4::from_quat`). Only when
+/// every velocity is already within its limit (`clamp_length`'s first test, which then
+/// leaves it as it is); false, with nothing written, otherwise.
+#[inline]
+fn integrate_four(four: &mut [SolverBody], h: f32, cfg: &WorldConfig) -> bool {
+    let (max_v2, max_w2) = (
+        cfg.max_linear_speed * cfg.max_linear_speed,
+        cfg.max_angular_speed * cfg.max_angular_speed,
+    );
+    let within = |b: &SolverBody| b.v.length_squared() <= max_v2 && b.w.length_squared() <= max_w2;
+    if !(max_v2 < f32::INFINITY && max_w2 < f32::INFINITY && four.iter().all(within)) {
+        return false;
+    }
+    let (mut v, mut w, mut dp) = (V4::ZERO, V4::ZERO, V4::ZERO);
+    let mut q = [F4::ZERO; 4];
+    for (l, b) in four.iter().enumerate() {
+        v.set(l, b.v);
+        w.set(l, b.w);
+        dp.set(l, b.dp);
+        for (lane, x) in q.iter_mut().zip([b.q.x, b.q.y, b.q.z, b.q.w]) {
+            lane.set(l, x);
+        }
+    }
+    let dp = dp.add(&v.scale(F4::splat(h)));
+    // `(a, 0) q` with `a = ω h / 2`, as `Quat::integrate` forms it.
+    let a = w.scale(F4::splat(0.5 * h));
+    let [qx, qy, qz, qw] = q;
+    let sum = [
+        qx + ((a.x * qw + a.y * qz) - a.z * qy),
+        qy + ((-(a.x * qz) + a.y * qw) + a.z * qx),
+        qz + ((a.x * qy - a.y * qx) + a.z * qw),
+        qw + ((-(a.x * qx) - a.y * qy) - a.z * qz),
+    ];
+    // `Quat::normalize`: unchanged when |q|² is 1 to the last bit, scaled by 1/√|q|²
+    // when that is above 1e-20 and finite, the identity otherwise.
+    let [sx, sy, sz, sw] = sum;
+    let l2 = sx * sx + sy * sy + sz * sz + sw * sw;
+    let inv = F4::splat(1.0).div(l2.sqrt());
+    let one = F4::splat(1.0);
+    let unit: [bool; 4] = core::array::from_fn(|l| l2.lane(l) == 1.0);
+    let scales: [bool; 4] = core::array::from_fn(|l| {
+        let x = l2.lane(l);
+        x > 1.0e-20 && x.is_finite()
+    });
+    let identity = [F4::ZERO, F4::ZERO, F4::ZERO, one];
+    let q: [F4; 4] = core::array::from_fn(|i| {
+        let (s, id) = (sum[i], identity[i]);
+        id.select_where(scales, s * inv).select_where(unit, s)
+    });
+    let rot = M4::from_quat(&q);
+    for (l, b) in four.iter_mut().enumerate() {
+        b.dp = dp.lane(l);
+        b.q = Quat::from_xyzw(q[0].lane(l), q[1].lane(l), q[2].lane(l), q[3].lane(l));
+        b.rot = rot.lane(l);
+    }
+    true
 }
 
 /// Write the solver bodies back: centre of mass moved by `Δp`, rotation, velocities,
@@ -1295,5 +1369,67 @@ mod tests {
                 assert_eq!(clamp_length(Vec3::new(bad, 1.0, 0.0), limit), Vec3::ZERO);
             }
         }
+    }
+
+    /// A solver body for the integration test: random velocities (some past the speed
+    /// limits, some not finite), a rotation that is unit, exactly the identity, tiny, or
+    /// not finite.
+    fn random_solver_body(rng: &mut SplitMix64, cfg: &WorldConfig) -> SolverBody {
+        let kind = rng.next_u64() % 16;
+        let mut c = |scale: f32| (rng.next_u64() % 20_001) as f32 * 1.0e-4 * scale - scale;
+        let mut b = SolverBody::ZERO;
+        let fast = if kind == 0 { 4.0 } else { 0.5 };
+        b.v = Vec3::new(c(1.0), c(1.0), c(1.0)) * (fast * cfg.max_linear_speed);
+        b.w = Vec3::new(c(1.0), c(1.0), c(1.0)) * (fast * cfg.max_angular_speed);
+        b.dp = Vec3::new(c(0.3), c(0.3), c(0.3));
+        b.q = match kind {
+            1 => Quat::IDENTITY,
+            2 => Quat::from_xyzw(0.0, 0.0, 0.0, 1.0e-12),
+            3 => Quat::from_xyzw(f32::NAN, 0.0, 0.0, 1.0),
+            _ => Quat::from_xyzw(c(1.0), c(1.0), c(1.0), c(1.0)).normalize(),
+        };
+        if kind == 4 {
+            b.v.y = f32::NAN;
+        }
+        if kind == 5 {
+            // Resting: ω = 0 keeps an identity rotation's |q|² exactly 1.
+            (b.w, b.q) = (Vec3::ZERO, Quat::IDENTITY);
+        }
+        b
+    }
+
+    #[test]
+    fn four_bodies_in_lanes_integrate_to_the_bits_of_one_at_a_time() {
+        let cfg = WorldConfig::DEFAULT;
+        let h = cfg.substep();
+        let mut rng = SplitMix64::new(41);
+        let mut lanes_taken = 0;
+        for round in 0..3000 {
+            // 0 to 11 bodies: full groups of four and a remainder.
+            let n = (rng.next_u64() % 12) as usize;
+            let mut bodies = [SolverBody::ZERO; 11];
+            for b in bodies.iter_mut().take(n) {
+                *b = random_solver_body(&mut rng, &cfg);
+            }
+            let mut one_at_a_time = bodies;
+            for b in one_at_a_time.iter_mut().take(n) {
+                integrate_one(b, h, &cfg);
+            }
+            let mut copy = bodies;
+            lanes_taken += usize::from(n >= 4 && integrate_four(&mut copy[..4], h, &cfg));
+            integrate_positions(&mut bodies[..n], h, &cfg);
+            // Bits, so NaN rotations compare too.
+            let bits = |b: &SolverBody| {
+                let q = [b.q.x, b.q.y, b.q.z, b.q.w].map(f32::to_bits);
+                let r = [b.rot.x, b.rot.y, b.rot.z, b.dp, b.v, b.w]
+                    .map(|v| [v.x, v.y, v.z].map(f32::to_bits));
+                (q, r)
+            };
+            for (i, (x, y)) in bodies.iter().zip(&one_at_a_time).enumerate() {
+                assert_eq!(bits(x), bits(y), "round {round}, body {i} of {n}");
+            }
+        }
+        // Both paths ran: groups within the limits, and groups that fell back.
+        assert!(lanes_taken > 200, "{lanes_taken}");
     }
 }

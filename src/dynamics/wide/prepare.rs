@@ -19,68 +19,8 @@ use super::super::solver::{SolverBody, NONE};
 use super::super::support::Supports;
 use super::*;
 use crate::config::WorldConfig;
-use crate::math::{scalar, Mat3};
-
-/// A 3×3 matrix per lane, by columns (as [`Mat3`]).
-#[derive(Clone, Copy, Default)]
-struct M4 {
-    x: V4,
-    y: V4,
-    z: V4,
-}
-
-impl M4 {
-    fn set(&mut self, l: usize, m: &Mat3) {
-        self.x.set(l, m.x);
-        self.y.set(l, m.y);
-        self.z.set(l, m.z);
-    }
-
-    /// `M v`, as [`Mat3::mul_vec`]: `(x vₓ + y v_y) + z v_z`.
-    #[inline(always)]
-    fn mul_vec(&self, v: &V4) -> V4 {
-        self.x
-            .scale(v.x)
-            .add(&self.y.scale(v.y))
-            .add(&self.z.scale(v.z))
-    }
-
-    /// The rotation matrices of four quaternions given as lanes `[x, y, z, w]`: per lane
-    /// exactly [`Mat3::from_quat`] (the same operations in the same order).
-    #[inline(always)]
-    fn from_quat(q: &[F4; 4]) -> M4 {
-        let [x, y, z, w] = *q;
-        let (one, two) = (F4::splat(1.0), F4::splat(2.0));
-        let (x2, y2, z2) = (x * two, y * two, z * two);
-        M4 {
-            x: V4 {
-                x: one + (y * -y2 - z * z2),
-                y: z2 * w - x * -y2,
-                z: -y2 * w + x * z2,
-            },
-            y: V4 {
-                x: -z2 * w + y * x2,
-                y: one + (z * -z2 - x * x2),
-                z: x2 * w - y * -z2,
-            },
-            z: V4 {
-                x: y2 * w - z * -x2,
-                y: -x2 * w + z * y2,
-                z: one + (x * -x2 - y * y2),
-            },
-        }
-    }
-
-    /// `Mᵀ v`, as [`Mat3::transpose_mul_vec`].
-    #[inline]
-    fn transpose_mul_vec(&self, v: &V4) -> V4 {
-        V4 {
-            x: self.x.dot(v),
-            y: self.y.dot(v),
-            z: self.z.dot(v),
-        }
-    }
-}
+use crate::math::lanes::M4;
+use crate::math::scalar;
 
 /// What the rows read of the four contacts and their bodies, gathered lane by lane. One
 /// is kept for a whole step's groups ([`Inputs::clear_lanes`] between them).
