@@ -684,6 +684,18 @@ fn by_fours(
     rest.iter_mut().for_each(one);
 }
 
+/// The squares of the linear and angular speed limits, when both are finite: then a
+/// velocity whose square is at most its limit's is one `clamp_length` leaves as it is
+/// (its first test), which the lanes check instead of clamping.
+#[inline]
+fn squared_limits(cfg: &WorldConfig) -> Option<(f32, f32)> {
+    let (v2, w2) = (
+        cfg.max_linear_speed * cfg.max_linear_speed,
+        cfg.max_angular_speed * cfg.max_angular_speed,
+    );
+    (v2 < f32::INFINITY && w2 < f32::INFINITY).then_some((v2, w2))
+}
+
 /// [`integrate_velocities`] for one body.
 #[inline]
 fn velocities_one(b: &mut SolverBody, cfg: &WorldConfig) {
@@ -702,13 +714,9 @@ fn velocities_one(b: &mut SolverBody, cfg: &WorldConfig) {
 /// written, when a body is not dynamic or a velocity is past its limit.
 #[inline]
 fn velocities_four(four: &mut [SolverBody], cfg: &WorldConfig) -> bool {
-    let (max_v2, max_w2) = (
-        cfg.max_linear_speed * cfg.max_linear_speed,
-        cfg.max_angular_speed * cfg.max_angular_speed,
-    );
-    if !(max_v2 < f32::INFINITY && max_w2 < f32::INFINITY) {
+    let Some((max_v2, max_w2)) = squared_limits(cfg) else {
         return false;
-    }
+    };
     let (mut v, mut w, mut dv, mut dw) = (V4::ZERO, V4::ZERO, V4::ZERO, V4::ZERO);
     let (mut lin, mut ang) = (F4::ZERO, F4::ZERO);
     let mut dynamic = true;
@@ -764,12 +772,11 @@ fn integrate_one(b: &mut SolverBody, h: f32, cfg: &WorldConfig) {
 /// leaves it as it is); false, with nothing written, otherwise.
 #[inline]
 fn integrate_four(four: &mut [SolverBody], h: f32, cfg: &WorldConfig) -> bool {
-    let (max_v2, max_w2) = (
-        cfg.max_linear_speed * cfg.max_linear_speed,
-        cfg.max_angular_speed * cfg.max_angular_speed,
-    );
+    let Some((max_v2, max_w2)) = squared_limits(cfg) else {
+        return false;
+    };
     let within = |b: &SolverBody| b.v.length_squared() <= max_v2 && b.w.length_squared() <= max_w2;
-    if !(max_v2 < f32::INFINITY && max_w2 < f32::INFINITY && four.iter().all(within)) {
+    if !four.iter().all(within) {
         return false;
     }
     let (mut v, mut w, mut dp) = (V4::ZERO, V4::ZERO, V4::ZERO);
