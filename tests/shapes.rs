@@ -1482,3 +1482,54 @@ fn hull_builds_match_their_golden_hash() {
     };
     assert_eq!(h, golden, "hash {h:#018x}");
 }
+
+/// `ConvexHull::UNIT_TETRAHEDRON` is what the builder makes of the four corners, every
+/// field to the bit (the `Debug` text tells `-0.0` from `0.0`, which `==` does not).
+#[test]
+fn unit_tetrahedron_is_the_builders_hull_to_the_bit() {
+    let built = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
+    assert_eq!(
+        format!("{:?}", ConvexHull::UNIT_TETRAHEDRON),
+        format!("{built:?}")
+    );
+}
+
+/// `rebuild` in place gives `new`'s answer to the bit, whatever the slot held before (the
+/// last cloud's hull, larger or smaller), and leaves the unit tetrahedron after a refusal:
+/// the scenes' clouds, a reduced sphere and 600 random clouds of every kind, one slot.
+#[test]
+fn rebuild_in_place_matches_new_to_the_bit() {
+    let mut rng = SplitMix64::new(2000);
+    let mut clouds: Vec<Vec<Vec3>> = (0..600).map(|_| random_cloud(&mut rng)).collect();
+    clouds.push(fibonacci_sphere(500, 1.0));
+    let mut rng = SplitMix64::new(carom::scenes::SEED);
+    for _ in 0..8 {
+        clouds.push((0..16).map(|_| rng.unit_vector()).collect());
+    }
+    let mut slot = ConvexHull::UNIT_TETRAHEDRON;
+    let (mut built, mut refused) = (0, 0);
+    for cloud in &clouds {
+        let fresh = ConvexHull::new(cloud);
+        let in_place = slot.rebuild(cloud);
+        match fresh {
+            Ok(hull) => {
+                assert_eq!(in_place, Ok(()));
+                assert_eq!(format!("{slot:?}"), format!("{hull:?}"));
+                built += 1;
+            }
+            Err(e) => {
+                assert_eq!(in_place, Err(e));
+                assert_eq!(
+                    format!("{slot:?}"),
+                    format!("{:?}", ConvexHull::UNIT_TETRAHEDRON)
+                );
+                refused += 1;
+            }
+        }
+    }
+    // Both outcomes were exercised.
+    assert!(
+        built > 100 && refused > 10,
+        "built {built}, refused {refused}"
+    );
+}

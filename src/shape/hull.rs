@@ -153,6 +153,72 @@ const EMPTY_HULL: ConvexHull = ConvexHull {
     outer_radius: 0.0,
 };
 
+/// The hull of the unit tetrahedron's corners `0, x, y, z`, field for field what
+/// [`ConvexHull::new`] builds from them (a test holds the two to the bit), written out so
+/// it can be a constant.
+const fn unit_tetrahedron() -> ConvexHull {
+    let mut h = EMPTY_HULL;
+    write_unit_tetrahedron(&mut h);
+    h
+}
+
+/// Write [`unit_tetrahedron`]'s fields over `h`, an [`EMPTY_HULL`] (the fields it leaves
+/// are those of the empty hull): in place, with no hull staged on the stack.
+const fn write_unit_tetrahedron(h: &mut ConvexHull) {
+    // 1/√3 and 1/(4√3) as the builder rounds them (f64, then f32).
+    const ROOT_THIRD: f32 = 0.577_350_26;
+    const DEPTH: f32 = 0.144_337_56;
+    h.vertices[1] = Vec3::X;
+    h.vertices[2] = Vec3::Y;
+    h.vertices[3] = Vec3::Z;
+    h.vertex_count = 4;
+    h.vertex_lanes[0] = V4 {
+        x: F4([0.0, 1.0, 0.0, 0.0]),
+        y: F4([0.0, 0.0, 1.0, 0.0]),
+        z: F4([0.0, 0.0, 0.0, 1.0]),
+    };
+    // The slanted face first, then the faces on z = 0, x = 0 and y = 0.
+    h.normals[0] = Vec3::new(ROOT_THIRD, ROOT_THIRD, ROOT_THIRD);
+    h.normals[1] = Vec3::new(0.0, 0.0, -1.0);
+    h.normals[2] = Vec3::new(-1.0, 0.0, 0.0);
+    h.normals[3] = Vec3::new(0.0, -1.0, 0.0);
+    h.offsets[0] = ROOT_THIRD;
+    let corners: [[u8; 3]; 4] = [[1, 2, 3], [0, 2, 1], [0, 3, 2], [0, 1, 3]];
+    let mut f = 0;
+    while f < 4 {
+        h.face_start[f] = 3 * f as u16;
+        h.face_len[f] = 3;
+        let mut k = 0;
+        while k < 3 {
+            h.face_indices[3 * f + k] = corners[f][k];
+            k += 1;
+        }
+        f += 1;
+    }
+    h.face_count = 4;
+    let edges: [[u8; 4]; 6] = [
+        [1, 2, 0, 1],
+        [2, 3, 0, 2],
+        [0, 2, 1, 2],
+        [0, 3, 2, 3],
+        [0, 1, 3, 1],
+        [1, 3, 3, 0],
+    ];
+    let mut e = 0;
+    while e < 6 {
+        h.edges[e] = edges[e];
+        e += 1;
+    }
+    h.edge_count = 6;
+    h.closed = true;
+    h.centroid = Vec3::new(0.25, 0.25, 0.25);
+    h.tolerance = ConvexHull::TOLERANCE;
+    h.thinnest = ROOT_THIRD;
+    h.well_formed_edges = true;
+    h.inner_radius = DEPTH;
+    h.outer_radius = 1.0;
+}
+
 impl ConvexHull {
     /// Relative distance tolerance: the build tolerance is this times the largest
     /// `|coordinate|` of the input (at least [`ConvexHull::MIN_TOLERANCE`]). It is measured
@@ -165,6 +231,23 @@ impl ConvexHull {
     /// Largest `|coordinate|` accepted (m): the inertia of a hull this size (`~ L⁵`) stays
     /// finite in `f32` for densities up to 10⁶ kg/m³.
     pub const MAX_COORDINATE: f32 = 1.0e6;
+
+    /// The hull of the unit tetrahedron's corners `(0, 0, 0)`, `(1, 0, 0)`, `(0, 1, 0)`,
+    /// `(0, 0, 1)`: what [`ConvexHull::new`] gives for them, as a constant. A valid hull
+    /// to fill arrays and `static`s with before [`ConvexHull::rebuild`] builds each slot
+    /// in place (a hull is about 5 KB: on a microcontroller, a `static` array of them
+    /// costs no stack, where one built by value is staged on it).
+    ///
+    /// ```
+    /// use carom::{ConvexHull, Vec3};
+    ///
+    /// # fn main() -> Result<(), carom::Error> {
+    /// let corners = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+    /// assert_eq!(ConvexHull::new(&corners)?, ConvexHull::UNIT_TETRAHEDRON);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub const UNIT_TETRAHEDRON: ConvexHull = unit_tetrahedron();
 
     /// Build the convex hull of `points` (local frame, m), on the stack (about 26 KiB of
     /// working memory: 16 KiB of quickhull state, 5 KiB of polygons, the result), without
@@ -208,35 +291,140 @@ impl ConvexHull {
     ///   count as distinct): `Hull(Coincident)`, `Hull(Collinear)`, `Hull(Coplanar)`;
     /// - a numerically broken intermediate mesh (not seen in testing, but the builder
     ///   checks for it rather than trusting it): `Hull(TooComplex)`.
+    #[inline(never)]
     pub fn new(points: &[Vec3]) -> Result<ConvexHull, Error> {
         let eps = validate(points)? as f64;
-        let simplex = initial_simplex(points, eps)?;
-        let mut build_eps = eps;
         let mut builder = Builder::new(points, eps);
-        builder.restart(build_eps, simplex)?;
-        builder.run()?;
-        // A point the builder had to leave out (see `Builder::run`) can sit far outside
-        // when a small feature meets long, nearly coplanar faces: the cone to it would
-        // fold at the scale of `eps`. Build again at a finer scale, where the faces it
-        // is nearly coplanar with are told apart; faces still merge at `eps`.
-        for _ in 0..FINER_BUILDS {
-            if builder.reduced || !builder.leaves_a_point_outside(RETRY_OUTSIDE * eps) {
-                break;
-            }
-            let finer = build_eps * FINER_BUILD_FACTOR;
-            builder.restart(finer, simplex)?;
-            if builder.run().is_err() {
-                // The finer mesh broke down: the coarser build stands (built again, in
-                // place: one builder on the stack).
-                builder.restart(build_eps, simplex)?;
-                builder.run()?;
-                break;
-            }
-            build_eps = finer;
-        }
+        build_mesh(points, eps, &mut builder)?;
+        // Made once the mesh stands, so the compiler builds it in the result.
         let mut hull = EMPTY_HULL;
         builder.finish(&mut hull)?;
         Ok(hull)
+    }
+
+    /// Build the convex hull of `points` into `self`, in place: the hull
+    /// [`ConvexHull::new`] returns, bit for bit, without the result on the stack (the
+    /// builder's working memory still is). For hulls kept in `static` storage or in a
+    /// caller's array, filled first with [`ConvexHull::UNIT_TETRAHEDRON`].
+    ///
+    /// Fails as [`ConvexHull::new`] does. After an error `self` is
+    /// [`ConvexHull::UNIT_TETRAHEDRON`], whatever it held before: a valid hull, never a
+    /// partly written one.
+    ///
+    /// ```
+    /// use carom::{ConvexHull, Error, HullError, Vec3};
+    ///
+    /// # fn main() -> Result<(), Error> {
+    /// let mut hulls = [ConvexHull::UNIT_TETRAHEDRON; 2];
+    /// let cube: [Vec3; 8] = core::array::from_fn(|i| {
+    ///     Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32)
+    /// });
+    /// hulls[0].rebuild(&cube)?;
+    /// assert_eq!(hulls[0], ConvexHull::new(&cube)?);
+    ///
+    /// let flat = [Vec3::ZERO, Vec3::X, Vec3::Z, Vec3::new(1.0, 0.0, 1.0)];
+    /// assert_eq!(hulls[1].rebuild(&flat), Err(Error::Hull(HullError::Coplanar)));
+    /// assert_eq!(hulls[1], ConvexHull::UNIT_TETRAHEDRON);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn rebuild(&mut self, points: &[Vec3]) -> Result<(), Error> {
+        let built = self.build_in_place(points);
+        if built.is_err() {
+            // Field by field: assigning the constant would stage a hull on the stack.
+            self.clear();
+            write_unit_tetrahedron(self);
+        }
+        built
+    }
+
+    /// [`ConvexHull::new`] into `self`, cleared once the mesh stands (untouched when an
+    /// error comes before that; unspecified after a later one).
+    fn build_in_place(&mut self, points: &[Vec3]) -> Result<(), Error> {
+        let eps = validate(points)? as f64;
+        let mut builder = Builder::new(points, eps);
+        build_mesh(points, eps, &mut builder)?;
+        self.clear();
+        builder.finish(self)
+    }
+}
+
+/// The triangle mesh of `points` in `builder` (made by `Builder::new` with `eps`, the
+/// tolerance [`validate`] gave): the first build, then the finer ones a point left far
+/// outside asks for. Inlined into both callers, whose frame holds the builder.
+#[inline(always)]
+fn build_mesh<'p>(points: &'p [Vec3], eps: f64, builder: &mut Builder<'p>) -> Result<(), Error> {
+    let simplex = initial_simplex(points, eps)?;
+    let mut build_eps = eps;
+    builder.restart(build_eps, simplex)?;
+    builder.run()?;
+    // A point the builder had to leave out (see `Builder::run`) can sit far outside
+    // when a small feature meets long, nearly coplanar faces: the cone to it would
+    // fold at the scale of `eps`. Build again at a finer scale, where the faces it
+    // is nearly coplanar with are told apart; faces still merge at `eps`.
+    for _ in 0..FINER_BUILDS {
+        if builder.reduced || !builder.leaves_a_point_outside(RETRY_OUTSIDE * eps) {
+            break;
+        }
+        let finer = build_eps * FINER_BUILD_FACTOR;
+        builder.restart(finer, simplex)?;
+        if builder.run().is_err() {
+            // The finer mesh broke down: the coarser build stands (built again, in
+            // place: one builder on the stack).
+            builder.restart(build_eps, simplex)?;
+            builder.run()?;
+            break;
+        }
+        build_eps = finer;
+    }
+    Ok(())
+}
+
+impl ConvexHull {
+    /// Make `self` [`EMPTY_HULL`] field by field, in place (assigning the constant staged
+    /// a whole hull on the stack first). Every field is named: a new one fails to compile
+    /// here until it is cleared too.
+    fn clear(&mut self) {
+        let ConvexHull {
+            vertices,
+            vertex_count,
+            normals,
+            offsets,
+            face_start,
+            face_len,
+            face_count,
+            face_indices,
+            edges,
+            edge_count,
+            closed,
+            centroid,
+            tolerance,
+            reduced,
+            thinnest,
+            well_formed_edges,
+            inner_radius,
+            outer_radius,
+            vertex_lanes,
+        } = self;
+        vertices.fill(Vec3::ZERO);
+        *vertex_count = 0;
+        normals.fill(Vec3::ZERO);
+        offsets.fill(0.0);
+        face_start.fill(0);
+        face_len.fill(0);
+        *face_count = 0;
+        face_indices.fill(0);
+        edges.fill([0; 4]);
+        *edge_count = 0;
+        *closed = false;
+        *centroid = Vec3::ZERO;
+        *tolerance = 0.0;
+        *reduced = false;
+        *thinnest = 0.0;
+        *well_formed_edges = false;
+        *inner_radius = 0.0;
+        *outer_radius = 0.0;
+        vertex_lanes.fill(V4::ZERO);
     }
 
     /// The vertices.
