@@ -6,14 +6,14 @@
 use std::time::{Duration, Instant};
 
 use carom::scenes::{self, Scene};
-use carom::{ConvexHull, Vec3, World, WorldConfig};
+use carom::{ConvexHull, World, WorldConfig};
 use criterion::{criterion_group, Criterion};
 
 /// Large enough for pyramid100 and spheres.
 type BigWorld<'a> = World<'a, 5120, 24576, 64>;
 
 fn hulls() -> &'static [ConvexHull] {
-    let mut v = vec![ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap(); 64];
+    let mut v = vec![ConvexHull::UNIT_TETRAHEDRON; 64];
     scenes::make_hulls(&mut v, scenes::SEED).unwrap();
     Box::leak(v.into_boxed_slice())
 }

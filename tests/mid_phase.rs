@@ -468,7 +468,7 @@ fn the_mesh_pile_settles_on_its_terrain_and_repeats() {
 
 /// The scenes' eight hulls ([`scenes::make_hulls`] with the scenes' seed).
 fn scene_hulls() -> Vec<carom::ConvexHull> {
-    let mut v = vec![carom::ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap(); 8];
+    let mut v = vec![carom::ConvexHull::UNIT_TETRAHEDRON; 8];
     scenes::make_hulls(&mut v, scenes::SEED).unwrap();
     v
 }

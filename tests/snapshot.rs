@@ -10,11 +10,7 @@ fn hulls() -> &'static [ConvexHull] {
     use std::sync::OnceLock;
     static H: OnceLock<Vec<ConvexHull>> = OnceLock::new();
     H.get_or_init(|| {
-        let mut v = vec![
-            ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])
-                .unwrap_or_else(|_| panic!("tetra"));
-            8
-        ];
+        let mut v = vec![ConvexHull::UNIT_TETRAHEDRON; 8];
         scenes::make_hulls(&mut v, 7).unwrap();
         v
     })

@@ -219,13 +219,7 @@ fn run(args: &Args) -> Result<(), Fail> {
 
 /// The hulls of the hull scenes: [`SCENE_HULLS`] from `make_hulls` with the scenes' seed.
 fn scene_hulls() -> Result<Vec<ConvexHull>, Fail> {
-    let tetra = ConvexHull::new(&[
-        carom::Vec3::ZERO,
-        carom::Vec3::X,
-        carom::Vec3::Y,
-        carom::Vec3::Z,
-    ])?;
-    let mut hulls = vec![tetra; SCENE_HULLS];
+    let mut hulls = vec![ConvexHull::UNIT_TETRAHEDRON; SCENE_HULLS];
     scenes::make_hulls(&mut hulls, scenes::SEED)?;
     Ok(hulls)
 }

@@ -64,8 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     narrow_phase()?;
 
     // Shared by every world, so borrowed for 'static.
-    let mut hulls =
-        vec![ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?; REFERENCE_HULLS];
+    let mut hulls = vec![ConvexHull::UNIT_TETRAHEDRON; REFERENCE_HULLS];
     scenes::make_hulls(&mut hulls, SEED)?;
     let hulls: &'static [ConvexHull] = Box::leak(hulls.into_boxed_slice());
 
@@ -311,7 +310,7 @@ fn narrow_phase() -> Result<(), Error> {
             None => println!("box {what:16}: apart"),
         }
     }
-    let mut hulls = vec![ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?; 2];
+    let mut hulls = vec![ConvexHull::UNIT_TETRAHEDRON; 2];
     scenes::make_hulls(&mut hulls, 1)?;
     let (a, b) = (Shape::hull(&hulls[0]), Shape::hull(&hulls[1]));
     let mut cache = SimplexCache::default();

@@ -964,10 +964,7 @@ mod tests {
         std::thread::Builder::new()
             .stack_size(256 << 20)
             .spawn(|| {
-                let mut hulls = std::vec![
-                    ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z]).unwrap();
-                    scenes::REFERENCE_HULLS
-                ];
+                let mut hulls = std::vec![ConvexHull::UNIT_TETRAHEDRON; scenes::REFERENCE_HULLS];
                 scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
                 let mut terrain: std::boxed::Box<TerrainData> = std::boxed::Box::default();
                 let shapes = terrain.shapes().unwrap();

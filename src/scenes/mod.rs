@@ -319,7 +319,8 @@ pub fn make_hulls(out: &mut [ConvexHull], seed: u64) -> Result<usize, Error> {
         for p in pts.iter_mut() {
             *p = rng.unit_vector();
         }
-        *h = ConvexHull::new(&pts)?;
+        // In place: no hull-sized temporary on the stack (a microcontroller's concern).
+        h.rebuild(&pts)?;
     }
     Ok(out.len())
 }

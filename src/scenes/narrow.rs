@@ -138,29 +138,48 @@ impl core::fmt::Display for NarrowResult {
     }
 }
 
-/// The random hulls the pairs draw from: [`HULL_POINTS`] points on the unit sphere each.
-/// A hull that does not build (an error is a deterministic outcome too) stays `None` and
-/// its pairs use a cube of half-extent 0.5 m instead; the caller hashes which.
-fn build_hulls(rng: &mut SplitMix64) -> [Option<ConvexHull>; HULLS] {
-    let mut hulls = [None; HULLS];
-    for slot in hulls.iter_mut() {
-        let mut points = [Vec3::ZERO; HULL_POINTS];
-        for p in points.iter_mut() {
-            *p = rng.unit_vector();
+/// The random hulls the pairs draw from, kept where the caller wants them ([`run_in`];
+/// [`run`] keeps them on its stack): 16 points on the unit sphere each. A
+/// hull that does not build (an error is a deterministic outcome too) is marked so, and
+/// its pairs use a cube of half-extent 0.5 m instead; the workload hashes which.
+#[derive(Clone, Debug)]
+pub struct NarrowHulls {
+    hulls: [ConvexHull; HULLS],
+    built: [bool; HULLS],
+}
+
+impl NarrowHulls {
+    /// Storage for the workload's hulls, none built yet (a constant, so a firmware's
+    /// `static` holds it without staging it on the stack).
+    pub const EMPTY: NarrowHulls = NarrowHulls {
+        hulls: [ConvexHull::UNIT_TETRAHEDRON; HULLS],
+        built: [false; HULLS],
+    };
+
+    /// Build every hull in place from `rng`'s points.
+    fn build(&mut self, rng: &mut SplitMix64) {
+        for (hull, built) in self.hulls.iter_mut().zip(self.built.iter_mut()) {
+            let mut points = [Vec3::ZERO; HULL_POINTS];
+            for p in points.iter_mut() {
+                *p = rng.unit_vector();
+            }
+            *built = hull.rebuild(&points).is_ok();
         }
-        *slot = ConvexHull::new(&points).ok();
     }
-    hulls
+
+    /// Hull `index`, if it built.
+    fn get(&self, index: usize) -> Option<&ConvexHull> {
+        match self.built.get(index) {
+            Some(true) => self.hulls.get(index),
+            _ => None,
+        }
+    }
 }
 
 /// A random shape: kind 0 sphere (r in [0.2, 0.8) m), 1 capsule (half height and radius
 /// in [0.1, 0.5) m), 2 box (half-extents in [0.2, 0.8) m), 3 one of the hulls (about
 /// unit radius). Constructor errors fall back to a 0.5 m sphere, hashing `TAG_ERR`.
-fn random_shape<'h>(
-    rng: &mut SplitMix64,
-    hulls: &'h [Option<ConvexHull>; HULLS],
-    hash: &mut Fnv1a64,
-) -> Shape<'h> {
+fn random_shape<'h>(rng: &mut SplitMix64, hulls: &'h NarrowHulls, hash: &mut Fnv1a64) -> Shape<'h> {
     let kind = (rng.next_u64() % 4) as u32;
     hash.write_u32(kind);
     let built = match kind {
@@ -178,8 +197,8 @@ fn random_shape<'h>(
             let index = (rng.next_u64() % HULLS as u64) as usize;
             hash.write_u32(index as u32);
             match hulls.get(index) {
-                Some(Some(h)) => Ok(Shape::hull(h)),
-                _ => Shape::cuboid(Vec3::splat(0.5)),
+                Some(h) => Ok(Shape::hull(h)),
+                None => Shape::cuboid(Vec3::splat(0.5)),
             }
         }
     };
@@ -220,21 +239,29 @@ fn hash_manifold(m: &Manifold, hash: &mut Fnv1a64) {
 /// A anywhere in a 4 m cube (world frame) with a random rotation, B at a centre distance
 /// in [0.5, 2.0) m from A in a random direction with its own random rotation (from deep
 /// overlap to well apart). For each pair: [`distance`] from a cold cache, then [`contact`]
-/// with the [`MARGIN`]. Uses about 15 KB of stack (four hulls), no other memory.
+/// with the [`MARGIN`]. Keeps its four hulls on the stack (about 20 KB): [`run_in`] takes
+/// them in the caller's storage.
 pub fn run() -> NarrowResult {
+    let mut hulls = NarrowHulls::EMPTY;
+    run_in(&mut hulls)
+}
+
+/// [`run`] with its hulls built into `hulls` (whatever it held: each is built again).
+pub fn run_in(hulls: &mut NarrowHulls) -> NarrowResult {
     let mut rng = SplitMix64::new(SEED);
     let mut hash = Fnv1a64::new();
-    let hulls = build_hulls(&mut rng);
-    for h in hulls.iter() {
-        hash.write_u32(match h {
+    hulls.build(&mut rng);
+    let hulls = &*hulls;
+    for i in 0..HULLS {
+        hash.write_u32(match hulls.get(i) {
             Some(h) => h.vertices().len() as u32,
             None => TAG_ERR,
         });
     }
     let mut count = 0;
     for _ in 0..PAIRS {
-        let a = random_shape(&mut rng, &hulls, &mut hash);
-        let b = random_shape(&mut rng, &hulls, &mut hash);
+        let a = random_shape(&mut rng, hulls, &mut hash);
+        let b = random_shape(&mut rng, hulls, &mut hash);
         let pos_a = Vec3::new(
             rng.range(-2.0, 2.0),
             rng.range(-2.0, 2.0),

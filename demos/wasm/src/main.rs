@@ -8,7 +8,7 @@
 //! restores `tests/golden/mixed_500_micromath.snap`.
 
 use carom::scenes::{self, ReferenceWorld, Scene, REFERENCE_HULLS, SEED};
-use carom::{ConvexHull, Vec3};
+use carom::ConvexHull;
 
 /// The host's snapshot of the `mixed` scene at step [`scenes::SNAPSHOT_STEP`].
 #[cfg(not(feature = "micromath"))]
@@ -26,8 +26,7 @@ fn main() {
 }
 
 fn run() -> Result<(), carom::Error> {
-    let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
-    let mut hulls = vec![placeholder; REFERENCE_HULLS];
+    let mut hulls = vec![ConvexHull::UNIT_TETRAHEDRON; REFERENCE_HULLS];
     scenes::make_hulls(&mut hulls, SEED)?;
     // The ground of `terrain` (height field) and `terrain_mesh` (the same triangles as a
     // mesh), about 50 KB.

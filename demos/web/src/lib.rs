@@ -130,8 +130,7 @@ fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 
 fn hulls() -> Result<&'static [ConvexHull], Error> {
     let built = HULLS.get_or_init(|| {
-        let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
-        let mut hulls = vec![placeholder; REFERENCE_HULLS];
+        let mut hulls = vec![ConvexHull::UNIT_TETRAHEDRON; REFERENCE_HULLS];
         scenes::make_hulls(&mut hulls, SEED)?;
         Ok(hulls)
     });
