@@ -32,12 +32,14 @@
 //!
 //! Memory: the world (`ReferenceWorld`, about 1.2 MB) is a `static` the compiler builds
 //! (in `.data`: an empty world is not all zero bits, so its image takes as much flash),
-//! emptied between scenes where it lies (`World::reset`); its hulls (about 28 KB) and the
-//! terrain scenes' ground (`TerrainData`, about 50 KB) live in `.bss` statics handed out
-//! once by `cortex_m::singleton!`, which builds each on the stack first (the run's
-//! largest frames but for the hull builder's). `cortex_m::singleton!` would build the
-//! world on the stack too (a 1.2 MB frame), as would `*world = ReferenceWorld::new()` (a
-//! 113 KB one, in `World::new`).
+//! emptied between scenes where it lies (`World::reset`). Its eight hulls (about 40 KB),
+//! the terrain scenes' ground (`TerrainData`, about 50 KB) and the narrow workload's
+//! four hulls (`NarrowHulls`, about 20 KB) are `static`s built from constants
+//! (`ConvexHull::UNIT_TETRAHEDRON`, `TerrainData::EMPTY`, `NarrowHulls::EMPTY`) and
+//! filled in place (`ConvexHull::rebuild`), so none is staged on the stack: the run's
+//! deepest frames are the hull builder's and the world's own. (`cortex_m::singleton!`
+//! builds its value on the stack and moves it in: it staged each of them, and would the
+//! world too, a 1.2 MB frame, as would `*world = ReferenceWorld::new()`, a 113 KB one.)
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
@@ -45,10 +47,11 @@
 mod stack;
 mod ticks;
 
+use carom::scenes::narrow::NarrowHulls;
 use carom::scenes::{
     self, ReferenceWorld, Scene, TerrainData, TerrainShapes, REFERENCE_HULLS, SEED,
 };
-use carom::{ConvexHull, Vec3};
+use carom::ConvexHull;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 
@@ -64,8 +67,8 @@ static MIXED_500: &[u8] = include_bytes!("../../../tests/golden/mixed_500_microm
 enum Failure {
     /// carom refused an input (a scene, the snapshot).
     Carom(carom::Error),
-    /// A static was already handed out (`run` is called once).
-    StaticTaken,
+    /// The core peripherals were already taken (`run` is called once).
+    PeripheralsTaken,
 }
 
 /// SysTick ticks of one scene's steps: their sum and the largest.
@@ -87,10 +90,25 @@ fn main() -> ! {
     // image's data, copied to RAM at reset, and never on the stack. `#[entry]` hands it
     // out as a `&'static mut`.
     static mut WORLD: ReferenceWorld<'static> = ReferenceWorld::new();
+    // The world's hulls and terrain and the narrow workload's hulls: constants too,
+    // filled in place (`ConvexHull::rebuild`, `TerrainData::shapes`), so none of them is
+    // ever staged on the stack.
+    static mut HULLS: [ConvexHull; REFERENCE_HULLS] =
+        [ConvexHull::UNIT_TETRAHEDRON; REFERENCE_HULLS];
+    static mut TERRAIN: TerrainData = TerrainData::EMPTY;
+    static mut SHAPES: Option<TerrainShapes<'static>> = None;
+    static mut NARROW: NarrowHulls = NarrowHulls::EMPTY;
     let painted = stack::paint();
     let mut step_ticks = [StepTicks::default(); Scene::REFERENCE.len()];
     let mut peaks = StackPeaks::default();
-    let outcome = run(WORLD, &mut step_ticks, &painted, &mut peaks);
+    let statics = Statics {
+        world: WORLD,
+        hulls: HULLS,
+        terrain: TERRAIN,
+        shapes: SHAPES,
+        narrow: NARROW,
+    };
+    let outcome = run(statics, &mut step_ticks, &painted, &mut peaks);
     let used = peaks.deepest.max(stack::peak_use(&painted));
     let status = match outcome {
         Ok(()) => debug::EXIT_SUCCESS,
@@ -98,8 +116,8 @@ fn main() -> ! {
             hprintln!("error: {:?}", e);
             debug::EXIT_FAILURE
         }
-        Err(Failure::StaticTaken) => {
-            hprintln!("error: a static was taken twice");
+        Err(Failure::PeripheralsTaken) => {
+            hprintln!("error: the core peripherals were taken twice");
             debug::EXIT_FAILURE
         }
     };
@@ -122,8 +140,8 @@ fn main() -> ! {
 /// Peak stack (bytes from the top, `stack.rs`) of parts of the run.
 #[derive(Default)]
 struct StackPeaks {
-    /// The deepest of the parts measured with their own painting (the hulls' and
-    /// terrain's set-up, the scenes with the narrow workload, the restore): a later
+    /// The deepest of the parts measured with their own painting (the hulls' builds and
+    /// the terrain's set-up, the scenes with the narrow workload, the restore): a later
     /// painting covers what an earlier part touched, so each is read before the next.
     deepest: u32,
     /// The world's own work: building, stepping and hashing the reference scenes, and
@@ -132,20 +150,33 @@ struct StackPeaks {
     world: u32,
 }
 
+/// The run's `static`s (`main`'s), each handed out once.
+struct Statics {
+    world: &'static mut ReferenceWorld<'static>,
+    hulls: &'static mut [ConvexHull; REFERENCE_HULLS],
+    terrain: &'static mut TerrainData,
+    shapes: &'static mut Option<TerrainShapes<'static>>,
+    narrow: &'static mut NarrowHulls,
+}
+
 /// Print the golden lines and the restored line; time each reference scene's steps.
-/// Each scene starts from `world` emptied where it lies (`World::reset`). `painted`:
+/// Each scene starts from the world emptied where it lies (`World::reset`). `painted`:
 /// the caller's painting, read once the set-up is done; `peaks` gets the parts' peaks.
 fn run(
-    world: &'static mut ReferenceWorld<'static>,
+    statics: Statics,
     step_ticks: &mut [StepTicks; Scene::REFERENCE.len()],
     painted: &stack::Painted,
     peaks: &mut StackPeaks,
 ) -> Result<(), Failure> {
-    let hulls = reference_hulls()?;
-    let terrain = reference_terrain()?;
+    let world = statics.world;
+    // The reference hulls (`make_hulls` with the scenes' seed), each built in its slot.
+    scenes::make_hulls(statics.hulls, SEED)?;
+    let hulls: &'static [ConvexHull] = statics.hulls;
+    // The terrain scenes' ground, borrowing the terrain's data.
+    let terrain: &'static TerrainShapes<'static> = statics.shapes.insert(statics.terrain.shapes()?);
     peaks.deepest = stack::peak_use(painted);
     let scenes_painted = stack::paint();
-    let core = cortex_m::Peripherals::take().ok_or(Failure::StaticTaken)?;
+    let core = cortex_m::Peripherals::take().ok_or(Failure::PeripheralsTaken)?;
     let ticks = ticks::Ticks::start(core.SYST);
     for (scene, timed) in Scene::REFERENCE.into_iter().zip(step_ticks.iter_mut()) {
         world.reset();
@@ -162,7 +193,7 @@ fn run(
         hprintln!("{}", scene.line(world.checksum()));
     }
     peaks.world = stack::peak_use(&scenes_painted);
-    print_narrow();
+    print_narrow(statics.narrow);
     peaks.deepest = peaks.deepest.max(stack::peak_use(&scenes_painted));
     world.reset();
     let restore_painted = stack::paint();
@@ -174,25 +205,11 @@ fn run(
     Ok(())
 }
 
-/// Run the narrow-phase workload and print its line. Out of line, as
-/// [`reference_hulls`]: the workload's buffers (about 45 KB) are its own frame's.
+/// Run the narrow-phase workload with its hulls in `hulls` and print its line. Out of
+/// line: its queries' buffers are this frame's, not reserved under the scenes' steps.
 #[inline(never)]
-fn print_narrow() {
-    hprintln!("{}", scenes::narrow::run());
-}
-
-/// The reference hulls (`make_hulls` with the scenes' seed), in a static so the world can
-/// borrow them for `'static`. Out of line: `cortex_m::singleton!` builds the hulls in
-/// this frame before moving them into their static, and inlined, that frame would stay
-/// reserved under every scene's steps.
-#[inline(never)]
-fn reference_hulls() -> Result<&'static [ConvexHull], Failure> {
-    let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
-    let hulls: &'static mut [ConvexHull; REFERENCE_HULLS] =
-        cortex_m::singleton!(: [ConvexHull; REFERENCE_HULLS] = [placeholder; REFERENCE_HULLS])
-            .ok_or(Failure::StaticTaken)?;
-    scenes::make_hulls(hulls, SEED)?;
-    Ok(hulls)
+fn print_narrow(hulls: &mut NarrowHulls) {
+    hprintln!("{}", scenes::narrow::run_in(hulls));
 }
 
 #[panic_handler]
@@ -201,16 +218,4 @@ fn panic(info: &core::panic::PanicInfo) -> ! {
     debug::exit(debug::EXIT_FAILURE);
     #[allow(clippy::empty_loop)]
     loop {}
-}
-
-/// The terrain scenes' ground ([`TerrainData::shapes`]), in statics so the world can
-/// borrow it for `'static`. Out of line, as [`reference_hulls`].
-#[inline(never)]
-fn reference_terrain() -> Result<&'static TerrainShapes<'static>, Failure> {
-    let data: &'static mut TerrainData =
-        cortex_m::singleton!(: TerrainData = TerrainData::EMPTY).ok_or(Failure::StaticTaken)?;
-    let shapes = data.shapes()?;
-    let shapes: &'static TerrainShapes<'static> =
-        cortex_m::singleton!(: TerrainShapes<'static> = shapes).ok_or(Failure::StaticTaken)?;
-    Ok(shapes)
 }

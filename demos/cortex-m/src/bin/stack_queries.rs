@@ -60,7 +60,9 @@ fn cloud(twist: f32) -> [Vec3; 16] {
 
 #[entry]
 fn main() -> ! {
-    let status = match run() {
+    // Two hulls in a static built from a constant: no hull is staged on the stack.
+    static mut HULLS: [ConvexHull; 2] = [ConvexHull::UNIT_TETRAHEDRON; 2];
+    let status = match run(HULLS) {
         Ok(()) => debug::EXIT_SUCCESS,
         Err(e) => {
             hprintln!("error: {:?}", e);
@@ -72,16 +74,15 @@ fn main() -> ! {
     loop {}
 }
 
-fn run() -> Result<(), carom::Error> {
+fn run(hulls: &'static mut [ConvexHull; 2]) -> Result<(), carom::Error> {
     let refused = carom::Error::OutOfRange(carom::Input::Config);
-    let hulls: &'static mut [ConvexHull; 2] = {
-        let placeholder = ConvexHull::new(&[Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z])?;
-        cortex_m::singleton!(: [ConvexHull; 2] = [placeholder; 2]).ok_or(refused)?
-    };
     let points = black_box(cloud(0.3));
     measure("hull_build_16_points", || ConvexHull::new(&points));
-    hulls[0] = ConvexHull::new(&black_box(cloud(0.0)))?;
-    hulls[1] = ConvexHull::new(&black_box(cloud(0.7)))?;
+    // The same hull built in place: the builder without a hull of its own.
+    let slot = &mut hulls[0];
+    measure("hull_rebuild_16_points", || slot.rebuild(&points));
+    hulls[0].rebuild(&black_box(cloud(0.0)))?;
+    hulls[1].rebuild(&black_box(cloud(0.7)))?;
     let hulls: &'static [ConvexHull; 2] = hulls;
     let (a, b) = (Shape::hull(&hulls[0]), Shape::hull(&hulls[1]));
     let cube = Shape::cuboid(Vec3::new(0.5, 0.3, 0.4))?;
