@@ -122,7 +122,11 @@ pub enum HullError {
 }
 
 /// Everything that can go wrong at carom's public doors. Whatever the variant, the call
-/// changed nothing.
+/// changed nothing, with one documented exception: [`ConvexHull::rebuild`] leaves its slot
+/// as [`ConvexHull::UNIT_TETRAHEDRON`], a valid hull, never a partly written one.
+///
+/// [`ConvexHull::rebuild`]: crate::ConvexHull::rebuild
+/// [`ConvexHull::UNIT_TETRAHEDRON`]: crate::ConvexHull::UNIT_TETRAHEDRON
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 #[non_exhaustive]

@@ -1,5 +1,6 @@
 //! An arbitrary point cloud (duplicates, coplanar and collinear sets, NaN, huge and tiny
-//! coordinates): building its hull never panics, and a hull that builds is valid
+//! coordinates): building its hull never panics, a hull that builds is valid, and building
+//! it in place (`ConvexHull::rebuild`) gives the same answer
 //! (`carom::props::hull_properties`).
 #![no_main]
 

@@ -1,6 +1,6 @@
 //! Properties of [`ConvexHull::new`]: whatever the cloud, it returns a hull or an error and
-//! never panics, and a hull it returns is a closed, convex, counter-clockwise polytope
-//! built from the input points that holds them all.
+//! never panics, a hull it returns is a closed, convex, counter-clockwise polytope built
+//! from the input points that holds them all, and [`ConvexHull::rebuild`] agrees.
 
 use super::{check, Violation};
 use crate::error::{Error, HullError};
@@ -37,9 +37,13 @@ const MAX_EDGES: usize = 2 * (3 * MAX_HULL_VERTICES - 6);
 /// - every vertex, and (unless the hull is reduced) every input point, is inside or
 ///   within the slack of every face plane;
 /// - for density 1 the mass is positive and finite, the inertia finite, and the centroid
-///   strictly inside every face plane.
+///   strictly inside every face plane;
+/// - [`ConvexHull::rebuild`] into a slot gives the same answer: the same hull, or the same
+///   error with the slot left as [`ConvexHull::UNIT_TETRAHEDRON`].
 pub fn hull_properties(points: &[Vec3]) -> Result<(), Violation> {
-    let hull = match ConvexHull::new(points) {
+    let built = ConvexHull::new(points);
+    rebuild_agrees(points, &built)?;
+    let hull = match built {
         Ok(h) => h,
         Err(e) => {
             if points.len() < 4 {
@@ -75,6 +79,18 @@ pub fn hull_properties(points: &[Vec3]) -> Result<(), Violation> {
         }
     }
     mass_is_sound(&hull)
+}
+
+/// `rebuild` of `points` into a slot (holding the unit tetrahedron) agrees with `built`,
+/// `new`'s answer.
+fn rebuild_agrees(points: &[Vec3], built: &Result<ConvexHull, Error>) -> Result<(), Violation> {
+    let mut slot = ConvexHull::UNIT_TETRAHEDRON;
+    let rebuilt = slot.rebuild(points);
+    let agrees = match built {
+        Ok(hull) => rebuilt.is_ok() && slot == *hull,
+        Err(e) => rebuilt == Err(*e) && slot == ConvexHull::UNIT_TETRAHEDRON,
+    };
+    check(agrees, "hull: rebuild in place disagrees with new")
 }
 
 fn counts_in_range(hull: &ConvexHull) -> Result<(), Violation> {

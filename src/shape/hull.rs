@@ -309,7 +309,10 @@ impl ConvexHull {
     ///
     /// Fails as [`ConvexHull::new`] does. After an error `self` is
     /// [`ConvexHull::UNIT_TETRAHEDRON`], whatever it held before: a valid hull, never a
-    /// partly written one.
+    /// partly written one (the one exception to [`Error`]'s "the call changed nothing":
+    /// keeping the old hull would take a second one on the stack, the copy this method
+    /// exists to avoid). No world can be using the slot meanwhile: a world borrows its
+    /// hulls for as long as it lives.
     ///
     /// ```
     /// use carom::{ConvexHull, Error, HullError, Vec3};
