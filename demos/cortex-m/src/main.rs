@@ -36,10 +36,13 @@
 //! the terrain scenes' ground (`TerrainData`, about 50 KB) and the narrow workload's
 //! four hulls (`NarrowHulls`, about 20 KB) are `static`s built from constants
 //! (`ConvexHull::UNIT_TETRAHEDRON`, `TerrainData::EMPTY`, `NarrowHulls::EMPTY`) and
-//! filled in place (`ConvexHull::rebuild`), so none is staged on the stack: the run's
-//! deepest frames are the hull builder's and the world's own. (`cortex_m::singleton!`
-//! builds its value on the stack and moves it in: it staged each of them, and would the
-//! world too, a 1.2 MB frame, as would `*world = ReferenceWorld::new()`, a 113 KB one.)
+//! filled in place (`ConvexHull::rebuild`), so none is staged on the stack.
+//! (`cortex_m::singleton!` builds its value on the stack and moves it in: it staged each
+//! of them, and would the world too, a 1.2 MB frame, as would `*world =
+//! ReferenceWorld::new()`, a 113 KB one.) The run's parts (the set-up, the scenes, the
+//! narrow workload, the restore) are out-of-line functions called one after the other,
+//! so no part's frame is reserved under another's: the run's peak is the deepest part's
+//! (the narrow workload's queries), not a sum.
 #![no_std]
 #![no_main]
 #![deny(unsafe_code)]
@@ -101,14 +104,17 @@ fn main() -> ! {
     let painted = stack::paint();
     let mut step_ticks = [StepTicks::default(); Scene::REFERENCE.len()];
     let mut peaks = StackPeaks::default();
-    let statics = Statics {
-        world: WORLD,
-        hulls: HULLS,
-        terrain: TERRAIN,
-        shapes: SHAPES,
-        narrow: NARROW,
-    };
-    let outcome = run(statics, &mut step_ticks, &painted, &mut peaks);
+    // The set-up runs in frames of its own under `main`'s, not under the run's.
+    let outcome = set_up(HULLS, TERRAIN, SHAPES).and_then(|(hulls, terrain)| {
+        peaks.deepest = stack::peak_use(&painted);
+        let statics = Statics {
+            world: WORLD,
+            hulls,
+            terrain,
+            narrow: NARROW,
+        };
+        run(statics, &mut step_ticks, &mut peaks)
+    });
     let used = peaks.deepest.max(stack::peak_use(&painted));
     let status = match outcome {
         Ok(()) => debug::EXIT_SUCCESS,
@@ -150,32 +156,61 @@ struct StackPeaks {
     world: u32,
 }
 
-/// The run's `static`s (`main`'s), each handed out once.
+/// The run's `static`s (`main`'s), the hulls and the terrain built.
 struct Statics {
     world: &'static mut ReferenceWorld<'static>,
-    hulls: &'static mut [ConvexHull; REFERENCE_HULLS],
-    terrain: &'static mut TerrainData,
-    shapes: &'static mut Option<TerrainShapes<'static>>,
+    hulls: &'static [ConvexHull],
+    terrain: &'static TerrainShapes<'static>,
     narrow: &'static mut NarrowHulls,
 }
 
+/// Build the reference hulls (`make_hulls` with the scenes' seed), each in its slot, and
+/// the terrain scenes' ground, borrowing the terrain's data. Out of line: the hull
+/// builder's frames are under this one, not under the run's.
+#[inline(never)]
+fn set_up(
+    hulls: &'static mut [ConvexHull; REFERENCE_HULLS],
+    terrain: &'static mut TerrainData,
+    shapes: &'static mut Option<TerrainShapes<'static>>,
+) -> Result<(&'static [ConvexHull], &'static TerrainShapes<'static>), Failure> {
+    scenes::make_hulls(hulls, SEED)?;
+    Ok((hulls, shapes.insert(terrain.shapes()?)))
+}
+
 /// Print the golden lines and the restored line; time each reference scene's steps.
-/// Each scene starts from the world emptied where it lies (`World::reset`). `painted`:
-/// the caller's painting, read once the set-up is done; `peaks` gets the parts' peaks.
+/// Each scene starts from the world emptied where it lies (`World::reset`); `peaks` gets
+/// the parts' peaks.
 fn run(
     statics: Statics,
     step_ticks: &mut [StepTicks; Scene::REFERENCE.len()],
-    painted: &stack::Painted,
     peaks: &mut StackPeaks,
 ) -> Result<(), Failure> {
-    let world = statics.world;
-    // The reference hulls (`make_hulls` with the scenes' seed), each built in its slot.
-    scenes::make_hulls(statics.hulls, SEED)?;
-    let hulls: &'static [ConvexHull] = statics.hulls;
-    // The terrain scenes' ground, borrowing the terrain's data.
-    let terrain: &'static TerrainShapes<'static> = statics.shapes.insert(statics.terrain.shapes()?);
-    peaks.deepest = stack::peak_use(painted);
+    let (world, hulls, terrain) = (statics.world, statics.hulls, statics.terrain);
     let scenes_painted = stack::paint();
+    play_scenes(world, hulls, terrain, step_ticks)?;
+    peaks.world = stack::peak_use(&scenes_painted);
+    print_narrow(statics.narrow);
+    peaks.deepest = peaks.deepest.max(stack::peak_use(&scenes_painted));
+    world.reset();
+    let restore_painted = stack::paint();
+    let checksum = restore_mixed(world, hulls)?;
+    let restore = stack::peak_use(&restore_painted);
+    peaks.world = peaks.world.max(restore);
+    peaks.deepest = peaks.deepest.max(restore);
+    hprintln!("restored {}", Scene::Mixed.line(checksum));
+    Ok(())
+}
+
+/// Build, step (timing each step) and hash each reference scene in `world`, emptied
+/// where it lies for each (`World::reset`), and print its line. Out of line: the scenes'
+/// frames are not reserved under the narrow workload and the restore.
+#[inline(never)]
+fn play_scenes(
+    world: &mut ReferenceWorld<'static>,
+    hulls: &'static [ConvexHull],
+    terrain: &'static TerrainShapes<'static>,
+    step_ticks: &mut [StepTicks; Scene::REFERENCE.len()],
+) -> Result<(), Failure> {
     let core = cortex_m::Peripherals::take().ok_or(Failure::PeripheralsTaken)?;
     let ticks = ticks::Ticks::start(core.SYST);
     for (scene, timed) in Scene::REFERENCE.into_iter().zip(step_ticks.iter_mut()) {
@@ -192,17 +227,22 @@ fn run(
         }
         hprintln!("{}", scene.line(world.checksum()));
     }
-    peaks.world = stack::peak_use(&scenes_painted);
-    print_narrow(statics.narrow);
-    peaks.deepest = peaks.deepest.max(stack::peak_use(&scenes_painted));
-    world.reset();
-    let restore_painted = stack::paint();
-    let checksum = scenes::continue_from_snapshot(Scene::Mixed, world, hulls, MIXED_500)?;
-    let restore = stack::peak_use(&restore_painted);
-    peaks.world = peaks.world.max(restore);
-    peaks.deepest = peaks.deepest.max(restore);
-    hprintln!("restored {}", Scene::Mixed.line(checksum));
     Ok(())
+}
+
+/// Restore the host's snapshot of `mixed` into `world` and finish its run: the checksum
+/// after its last step. Out of line, as [`play_scenes`].
+#[inline(never)]
+fn restore_mixed(
+    world: &mut ReferenceWorld<'static>,
+    hulls: &'static [ConvexHull],
+) -> Result<u64, Failure> {
+    Ok(scenes::continue_from_snapshot(
+        Scene::Mixed,
+        world,
+        hulls,
+        MIXED_500,
+    )?)
 }
 
 /// Run the narrow-phase workload with its hulls in `hulls` and print its line. Out of
