@@ -351,4 +351,20 @@ mod tests {
         assert!(line.starts_with("narrow 256 0x"), "{line}");
         assert_eq!(line.len(), "narrow 256 0x".len() + 16, "{line}");
     }
+
+    /// `run_in` gives `run`'s result whatever its storage held: other hulls marked built,
+    /// then its own from the run before.
+    #[test]
+    fn run_in_reused_storage_matches_run() {
+        let mut hulls = NarrowHulls::EMPTY;
+        let mut rng = SplitMix64::new(7);
+        for (hull, built) in hulls.hulls.iter_mut().zip(hulls.built.iter_mut()) {
+            let cloud: [Vec3; 8] = core::array::from_fn(|_| rng.unit_vector() * 3.0);
+            *built = hull.rebuild(&cloud).is_ok();
+        }
+        assert!(hulls.built.iter().all(|&b| b));
+        let expected = run();
+        assert_eq!(run_in(&mut hulls), expected);
+        assert_eq!(run_in(&mut hulls), expected);
+    }
 }
