@@ -3,8 +3,9 @@
 //! Every operation is the scalar operation applied to each lane, in the same order, with
 //! the same rounding (`+ − × ÷ √`, compares and selects; no fused multiply-add, no
 //! reciprocal estimates, no horizontal sums). A compiler that vectorises these loops
-//! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32) and one that does not (a
-//! Cortex-M) produce the same bits lane for lane, so the golden checksums hold across
+//! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32 built with
+//! `-C target-feature=+simd128`) and one that does not (a Cortex-M, a wasm32 build
+//! without it) produce the same bits lane for lane, so the golden checksums hold across
 //! targets. Written as plain arrays, no `unsafe`; the two intrinsics, on x86, are the
 //! square root ([`F4::sqrt`], `safe_arch`'s `sqrtps`: correctly rounded, the same bits)
 //! and the equality mask ([`F4::eq_bits`], `cmpeqps` and `movmskps`: the same mask as
