@@ -12,6 +12,10 @@
 //! tables show medians over the repetitions, and the ratio is taken per repetition (paired
 //! runs on a shared, noisy machine) before its median. Progress goes to stderr, tables to
 //! stdout (Markdown).
+//!
+//! Built for wasm32-wasip1 (with `-C target-feature=+simd128` for both engines' SIMD) it
+//! runs under Node (`demos/wasm/run.mjs`), on the main thread with a 512 MiB stack set at
+//! link time (`build.rs`); `BENCHMARKS.md` has the commands.
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -179,11 +183,20 @@ fn main() {
             std::process::exit(2);
         }
     };
+    // wasm32 (wasip1, under Node) has no threads: its stack is set at link time
+    // (`build.rs`), and the run goes on the main thread.
+    #[cfg(target_arch = "wasm32")]
+    if let Err(e) = run(&args) {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
     // carom's worlds live inline (tens of MB for the large one): build them in a `Box` on
     // a thread with a big stack, in case the value passes through the stack on its way.
+    #[cfg(not(target_arch = "wasm32"))]
     let worker = std::thread::Builder::new()
         .stack_size(512 << 20)
         .spawn(move || run(&args));
+    #[cfg(not(target_arch = "wasm32"))]
     match worker.map(|h| h.join()) {
         Ok(Ok(Ok(()))) => {}
         Ok(Ok(Err(e))) => {
