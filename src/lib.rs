@@ -136,7 +136,7 @@
 //! rustflags = ["-C", "target-feature=+simd128"]
 //! ```
 //!
-//! A step is then 1.6 to 2 times faster (`demos/wasm/bench.sh`: `pyramid20`, `boxes`,
+//! A step is then 1.6 to 2.3 times faster (`demos/wasm/bench.sh`: `pyramid20`, `boxes`,
 //! `hulls`, `spheres` under Node) and its bits do not change: the lanes do the scalar
 //! operations in the scalar order, and CI checks the golden checksums of a wasm32 build
 //! with and without it (and of the web page, built with it, in Chromium).
