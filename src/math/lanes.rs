@@ -109,11 +109,38 @@ impl F4 {
         F4(safe_arch::sqrt_m128(safe_arch::m128::from_array(self.0)).to_array())
     }
 
-    /// Lane-wise [`scalar::sqrt`].
-    #[cfg(not(all(
+    /// Lane-wise [`scalar::sqrt`]: on wasm32 built with SIMD, one `f32x4.sqrt` (the IEEE
+    /// root in each lane, as [`scalar::sqrt`] there).
+    #[cfg(all(
         not(feature = "micromath"),
-        any(target_arch = "x86", target_arch = "x86_64"),
-        target_feature = "sse"
+        target_arch = "wasm32",
+        target_feature = "simd128"
+    ))]
+    #[inline]
+    pub fn sqrt(self) -> F4 {
+        use core::arch::wasm32::{f32x4, f32x4_extract_lane, f32x4_sqrt};
+        let [a0, a1, a2, a3] = self.0;
+        let r = f32x4_sqrt(f32x4(a0, a1, a2, a3));
+        F4([
+            f32x4_extract_lane::<0>(r),
+            f32x4_extract_lane::<1>(r),
+            f32x4_extract_lane::<2>(r),
+            f32x4_extract_lane::<3>(r),
+        ])
+    }
+
+    /// Lane-wise [`scalar::sqrt`].
+    #[cfg(not(any(
+        all(
+            not(feature = "micromath"),
+            any(target_arch = "x86", target_arch = "x86_64"),
+            target_feature = "sse"
+        ),
+        all(
+            not(feature = "micromath"),
+            target_arch = "wasm32",
+            target_feature = "simd128"
+        )
     )))]
     #[inline]
     pub fn sqrt(self) -> F4 {
