@@ -119,10 +119,22 @@ pub(crate) fn sqrt(x: f64) -> f64 {
     get_f64_from_m128d_s(sqrt_m128d_s(v, v))
 }
 
+/// `√x` in f64 on wasm32 built with SIMD: WebAssembly's `f64x2.sqrt` of the value
+/// splatted, lane 0 (the IEEE root; libm's is a software routine there, see
+/// `scalar::sqrt`).
+#[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+pub(crate) fn sqrt(x: f64) -> f64 {
+    use core::arch::wasm32::{f64x2_extract_lane, f64x2_splat, f64x2_sqrt};
+    f64x2_extract_lane::<0>(f64x2_sqrt(f64x2_splat(x)))
+}
+
 /// `√x` in f64, correctly rounded (IEEE `sqrt`, the same bits on every target).
-#[cfg(not(all(
-    any(target_arch = "x86", target_arch = "x86_64"),
-    target_feature = "avx"
+#[cfg(not(any(
+    all(
+        any(target_arch = "x86", target_arch = "x86_64"),
+        target_feature = "avx"
+    ),
+    all(target_arch = "wasm32", target_feature = "simd128")
 )))]
 pub(crate) fn sqrt(x: f64) -> f64 {
     libm::sqrt(x)
