@@ -136,10 +136,13 @@
 //! rustflags = ["-C", "target-feature=+simd128"]
 //! ```
 //!
-//! A step is then 1.6 to 2.3 times faster (`demos/wasm/bench.sh`: `pyramid20`, `boxes`,
+//! A step is then 1.9 to 2.6 times faster (`demos/wasm/bench.sh`: `pyramid20`, `boxes`,
 //! `hulls`, `spheres` under Node) and its bits do not change: the lanes do the scalar
-//! operations in the scalar order, and CI checks the golden checksums of a wasm32 build
-//! with and without it (and of the web page, built with it, in Chromium).
+//! operations in the scalar order, and the square root becomes the `f32x4.sqrt`
+//! instruction, the IEEE root that libm's software routine (a wasm32 build without SIMD)
+//! computes too. CI runs the math tests of such a build (the roots against libm's, bit
+//! for bit) and checks the golden checksums of a wasm32 build with and without it (and of
+//! the web page, built with it, in Chromium).
 //!
 //! # Capacity planning
 //!
