@@ -113,7 +113,8 @@
 //!   [`FixedTimestep`] with the same frame times on every peer), not results of the
 //!   platform's `sin`/`cos`/`sqrt` or of fused multiply-adds that differ by target
 //!   (compute them with [`math::scalar`], which is libm's code on every target but the
-//!   square root of an x86 build with AVX, the same correctly rounded root,
+//!   square root of an x86 build with AVX or a wasm32 build with SIMD, the same
+//!   correctly rounded root as an instruction,
 //!   or send the inputs, not the results),
 //!   not values from an unordered container's iteration order.
 //! - **Step, do not interpolate, the state you compare.** [`FrameSteps::alpha`] is
