@@ -6,10 +6,11 @@
 //! (SSE2 on x86_64, NEON on aarch64, simd128 on wasm32 built with
 //! `-C target-feature=+simd128`) and one that does not (a Cortex-M, a wasm32 build
 //! without it) produce the same bits lane for lane, so the golden checksums hold across
-//! targets. Written as plain arrays, no `unsafe`; the two intrinsics, on x86, are the
+//! targets. Written as plain arrays, no `unsafe`; the intrinsics are, on x86, the
 //! square root ([`F4::sqrt`], `safe_arch`'s `sqrtps`: correctly rounded, the same bits)
 //! and the equality mask ([`F4::eq_bits`], `cmpeqps` and `movmskps`: the same mask as
-//! four compares).
+//! four compares), and on wasm32 with SIMD the square root (`core::arch::wasm32`'s
+//! `f32x4_sqrt`, the IEEE root in each lane).
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
