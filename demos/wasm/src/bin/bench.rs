@@ -36,8 +36,12 @@ fn main() {
     }
 }
 
+/// A carom error as the message `main` prints.
+fn err(e: carom::Error) -> String {
+    format!("{e:?}")
+}
+
 fn run() -> Result<(), String> {
-    let err = |e: carom::Error| format!("{e:?}");
     let mut names = Vec::new();
     let mut cap = u32::MAX;
     let mut args = std::env::args().skip(1);
@@ -90,7 +94,6 @@ fn start<'a>(
     scene: Scene,
     hulls: &'a [ConvexHull],
 ) -> Result<(), String> {
-    let err = |e: carom::Error| format!("{e:?}");
     world.reset();
     let config = WorldConfig {
         sleep_enabled: false,
