@@ -85,7 +85,8 @@
 //!
 //! Events of the step are then in [`World::events`]. A world whose bodies all sleep and
 //! that no call has changed steps in O(bodies). [`World::step_traced`] records a digest
-//! after every stage.
+//! after every stage; [`World::step_observed`] calls back as each stage ends, to time
+//! the stages on the target (a cycle counter on a Cortex-M, `Instant` on a host).
 //!
 //! # Units
 //!

@@ -8,7 +8,7 @@ use crate::dynamics::broad_phase::{self, BroadPhase};
 use crate::dynamics::contact::{self, Contact};
 use crate::dynamics::events::{Event, StepReport};
 use crate::dynamics::pool::{BodyHandle, Pool};
-use crate::dynamics::snapshot::{Stage, StepTrace};
+use crate::dynamics::snapshot::{Hooks, Stage, StepTrace};
 use crate::dynamics::solver::{self, Solver};
 use crate::dynamics::{ccd, mid_phase, projection, sleep};
 use crate::error::{finite_vec, Error, Input, Pool as PoolKind};
@@ -152,16 +152,36 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
 
     /// Advance the world by one fixed step of `config.dt` seconds.
     pub fn step(&mut self) -> StepReport {
-        self.step_traced(None)
+        self.step_with(Hooks::NONE)
     }
 
     /// [`World::step`], recording a digest of the state after every stage into `trace`:
     /// two peers that compare traces find the first stage where they diverge.
-    ///
-    /// The pipeline, one call per stage (DESIGN.md, "One fixed step"):
-    pub fn step_traced(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
+    pub fn step_traced(&mut self, trace: Option<&mut StepTrace>) -> StepReport {
+        self.step_with(Hooks {
+            trace,
+            on_stage: None,
+        })
+    }
+
+    /// [`World::step`], calling `on_stage` right after each stage ends, once per stage in
+    /// the order of [`Stage::ALL`] (a step of a world at rest too): a profiler's hook.
+    /// Read a clock in it (a cycle counter on a Cortex-M, `std::time::Instant` on a
+    /// host) and the time between two calls is the stage between them; `compare/`'s
+    /// `--stages` table is made this way. The callback cannot reach the world, which the
+    /// step holds, so the step computes the same as [`World::step`], to the bit.
+    pub fn step_observed(&mut self, on_stage: &mut dyn FnMut(Stage)) -> StepReport {
+        self.step_with(Hooks {
+            trace: None,
+            on_stage: Some(on_stage),
+        })
+    }
+
+    /// The pipeline, one call per stage (DESIGN.md, "One fixed step"); `hooks` hear of
+    /// each stage as it ends.
+    fn step_with(&mut self, mut hooks: Hooks<'_>) -> StepReport {
         if self.quiet {
-            return self.quiet_step(trace);
+            return self.quiet_step(hooks);
         }
         let cfg = self.config;
         let mut report = StepReport::default();
@@ -173,7 +193,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         self.broad
             .find_new_pairs(bodies, contacts, pairs, &mut report);
         contact::insert_pairs(contacts, pairs, bodies, &cfg, &mut report);
-        self.trace(&mut trace, Stage::BroadPhase);
+        self.stage_done(&mut hooks, Stage::BroadPhase);
         // 4 mid phase: the part pairs of meshes and compounds that may touch
         mid_phase::update_parts(&mut self.contacts, &self.bodies, &mut report);
         // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
@@ -185,24 +205,24 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             events,
             &mut report,
         );
-        self.trace(&mut trace, Stage::NarrowPhase);
+        self.stage_done(&mut hooks, Stage::NarrowPhase);
         // 7 solve in sub-steps: integrate, warm start, soft contacts, relax, restitution
         let (contacts, scratch) = (&mut self.contacts, &mut self.pairs);
         solver::solve(&mut self.solver, contacts, &mut self.bodies, scratch, &cfg);
-        self.trace(&mut trace, Stage::Solve);
+        self.stage_done(&mut hooks, Stage::Solve);
         // 8 continuous collision: time of impact for fast bodies
         let (bodies, contacts, pairs) = (&mut self.bodies, &self.contacts, &mut self.pairs);
         let broad = &self.broad;
         ccd::sweep_fast_bodies(bodies, broad, contacts, pairs, &cfg, cfg.dt, &mut report);
-        self.trace(&mut trace, Stage::Continuous);
+        self.stage_done(&mut hooks, Stage::Continuous);
         // 9 projection: bounded push-out of the deep penetration that remains
         projection::project(&mut self.solver, &self.contacts, &mut self.bodies, &cfg);
-        self.trace(&mut trace, Stage::Projection);
+        self.stage_done(&mut hooks, Stage::Projection);
         // 10 sleep: islands fall asleep and wake together
         report.awake_bodies =
             sleep::update_sleep(&mut self.bodies, &self.contacts, &mut self.islands, &cfg);
         self.step_count = self.step_count.wrapping_add(1);
-        self.trace(&mut trace, Stage::Sleep);
+        self.stage_done(&mut hooks, Stage::Sleep);
         self.report = report;
         self.quiet = report.awake_bodies == 0
             && !self
@@ -215,7 +235,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     /// A step of a world at rest (see `quiet`): every stage would leave the state as it
     /// is, so only the step count moves; the report and the trace are what the full step
     /// would give.
-    fn quiet_step(&mut self, mut trace: Option<&mut StepTrace>) -> StepReport {
+    fn quiet_step(&mut self, mut hooks: Hooks<'_>) -> StepReport {
         self.events.clear();
         // The broad phase would find no new pair (nothing moved).
         self.pairs.clear();
@@ -238,10 +258,10 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
             Stage::Continuous,
             Stage::Projection,
         ] {
-            self.trace(&mut trace, stage);
+            self.stage_done(&mut hooks, stage);
         }
         self.step_count = self.step_count.wrapping_add(1);
-        self.trace(&mut trace, Stage::Sleep);
+        self.stage_done(&mut hooks, Stage::Sleep);
         self.report = report;
         report
     }

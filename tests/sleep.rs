@@ -239,3 +239,31 @@ fn an_all_asleep_world_steps_like_the_full_pipeline() {
         }
     }
 }
+
+/// A world at rest takes a shortcut through the step (nothing can move), and still
+/// names every stage, in order, to `step_observed`, steps as `step` does, and keeps
+/// every body where it is.
+#[test]
+fn a_world_at_rest_still_names_every_stage() {
+    let mut w = W::with_config(WorldConfig::DEFAULT).unwrap();
+    ground(&mut w);
+    let boxes = stack(&mut w, 0.0, 3);
+    steps_until_asleep(&mut w, &boxes, 240).expect("asleep within 4 s");
+    let positions = |w: &W| -> Vec<Vec3> {
+        boxes
+            .iter()
+            .map(|&h| w.body(h).unwrap().position())
+            .collect()
+    };
+    let at_rest = positions(&w);
+    let mut plain = w.clone();
+    for step in 0..5 {
+        let mut heard = Vec::new();
+        let report = w.step_observed(&mut |stage| heard.push(stage));
+        assert_eq!(heard, carom::Stage::ALL, "step {step} at rest");
+        assert_eq!(report, plain.step(), "step {step} at rest");
+        assert_eq!(w.checksum(), plain.checksum(), "step {step} at rest");
+        assert_eq!(report.awake_bodies, 0);
+    }
+    assert_eq!(positions(&w), at_rest);
+}

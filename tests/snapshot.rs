@@ -220,6 +220,23 @@ fn a_trace_names_the_first_stage_and_body_that_differ() {
     assert!(differing.contains(&h), "{differing:?}");
 }
 
+/// `step_observed` calls back once per stage, in pipeline order, and steps exactly as
+/// `step` does: same report, same state, to the bit, over a chaotic pile.
+#[test]
+fn an_observed_step_names_every_stage_in_order_and_changes_nothing() {
+    use carom::Stage;
+    let mut plain = mixed();
+    let mut observed = plain.clone();
+    for step in 0..200 {
+        let mut heard = Vec::new();
+        let r_observed = observed.step_observed(&mut |stage| heard.push(stage));
+        let r_plain = plain.step();
+        assert_eq!(heard, Stage::ALL, "step {step}");
+        assert_eq!(r_observed, r_plain, "step {step}");
+        assert_eq!(observed.checksum(), plain.checksum(), "step {step}");
+    }
+}
+
 /// With `serde`, a world serialises as its snapshot bytes and `RestoreSeed` brings them
 /// back: the round trip through JSON continues bit-identically.
 #[cfg(feature = "serde")]

@@ -997,7 +997,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     }
 }
 
-/// A stage of the step, for [`StepTrace`].
+/// A stage of the step, for [`StepTrace`] and [`World::step_observed`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Stage {
     /// 1–3: movement bounds, enlarged boxes and new candidate pairs.
@@ -1047,12 +1047,36 @@ impl StepTrace {
     }
 }
 
+/// What hears of a step's stages as they end: the digests of [`World::step_traced`] and
+/// the callback of [`World::step_observed`] (neither, for [`World::step`]).
+pub(crate) struct Hooks<'t> {
+    pub trace: Option<&'t mut StepTrace>,
+    pub on_stage: Option<&'t mut dyn FnMut(Stage)>,
+}
+
+impl Hooks<'_> {
+    /// No digest, no callback.
+    pub const NONE: Hooks<'static> = Hooks {
+        trace: None,
+        on_stage: None,
+    };
+}
+
 impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
     World<'a, BODIES, CONTACTS, EVENTS>
 {
+    /// `stage` has ended: fold the state into the trace, if tracing, then tell the
+    /// callback, if any.
+    pub(crate) fn stage_done(&self, hooks: &mut Hooks<'_>, stage: Stage) {
+        self.trace(hooks.trace.as_deref_mut(), stage);
+        if let Some(f) = hooks.on_stage.as_deref_mut() {
+            f(stage);
+        }
+    }
+
     /// Fold the state after `stage` into `trace`, if tracing.
-    pub(crate) fn trace(&self, trace: &mut Option<&mut StepTrace>, stage: Stage) {
-        let Some(t) = trace.as_deref_mut() else {
+    fn trace(&self, trace: Option<&mut StepTrace>, stage: Stage) {
+        let Some(t) = trace else {
             return;
         };
         let mut f = Fnv::new();
