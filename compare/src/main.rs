@@ -4,6 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --manifest-path compare/Cargo.toml -- [scene|narrow ...] [--reps N] [--steps N]
+//! cargo run --release --manifest-path compare/Cargo.toml --features stages -- --stages [scene ...]
 //! ```
 //!
 //! With no names: pyramid20, pyramid100, boxes, spheres, hulls, jolt_pyramid, then the
@@ -13,9 +14,14 @@
 //! runs on a shared, noisy machine) before its median. Progress goes to stderr, tables to
 //! stdout (Markdown).
 //!
+//! `--stages` prints instead where each engine's step goes, stage by stage (`stages.rs`);
+//! rapier's columns need the `stages` feature (its own timers, off in the ratio table).
+//!
 //! Built for wasm32-wasip1 (with `-C target-feature=+simd128` for both engines' SIMD) it
 //! runs under Node (`demos/wasm/run.mjs`), on the main thread with a 512 MiB stack set at
 //! link time (`build.rs`); `BENCHMARKS.md` has the commands.
+
+mod stages;
 
 use std::fmt::Write as _;
 use std::hint::black_box;
@@ -112,6 +118,8 @@ impl std::fmt::Display for Fail {
 struct Args {
     scenes: Vec<Scene>,
     narrow: bool,
+    /// The stage table (`stages.rs`) instead of the ratio and narrow-phase tables.
+    stages: bool,
     reps: usize,
     steps: Option<u32>,
 }
@@ -124,9 +132,10 @@ fn usage() -> String {
         .map(|s| s.name())
         .collect();
     format!(
-        "usage: compare [NAME ...] [--reps N] [--steps N]\n\
+        "usage: compare [NAME ...] [--reps N] [--steps N] [--stages]\n\
          NAME: a scene ({}) or `narrow`; default: {} and narrow\n\
-         --reps N: paired repetitions (default 3); --steps N: steps per scene run (default: SCENES.md's)",
+         --reps N: paired repetitions (default 3); --steps N: steps per scene run (default: SCENES.md's)\n\
+         --stages: ms per step of each stage of each engine instead (rapier's with `--features stages`)",
         names.join(", "),
         DEFAULT_SCENES.map(|s| s.name()).join(", ")
     )
@@ -136,6 +145,7 @@ fn parse_args() -> Result<Args, Fail> {
     let mut args = Args {
         scenes: Vec::new(),
         narrow: false,
+        stages: false,
         reps: 3,
         steps: None,
     };
@@ -151,6 +161,7 @@ fn parse_args() -> Result<Args, Fail> {
         match a.as_str() {
             "--reps" => args.reps = number("--reps")? as usize,
             "--steps" => args.steps = Some(number("--steps")?.min(u64::from(u32::MAX)) as u32),
+            "--stages" => args.stages = true,
             "-h" | "--help" => {
                 println!("{}", usage());
                 std::process::exit(0);
@@ -216,6 +227,14 @@ fn main() {
 
 fn run(args: &Args) -> Result<(), Fail> {
     let hulls = scene_hulls()?;
+    if args.stages {
+        let mut rows = Vec::new();
+        for &scene in &args.scenes {
+            rows.push(stages::compare_stages(scene, &hulls, args)?);
+        }
+        print!("{}", stages::stage_table(&rows, args.reps));
+        return Ok(());
+    }
     if !args.scenes.is_empty() {
         let mut rows = Vec::new();
         for &scene in &args.scenes {
