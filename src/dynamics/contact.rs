@@ -36,9 +36,17 @@
 //! the manifold is reused:
 //! its points are the same two surface points fixed in the two bodies, so their
 //! separation along the normal (fixed in A's frame) is recomputed exactly from the
-//! current poses, `s = (p_b − p_a) · n`, and no point of the shapes can have come closer
-//! than the margin without being there before. Resting stacks rebuild almost never
-//! (rapier's contact recycling works the same way).
+//! current poses, `s = (p_b − p_a) · n` (with the rotation matrices the bodies keep:
+//! `(R_bᵀ n)·l_b − n_A·l_a + n·(t_b − t_a)`), and no point of the shapes can have come
+//! closer than the margin without being there before. Resting stacks rebuild almost
+//! never (rapier's contact recycling works the same way).
+//!
+//! A convex pair first tries a looser bound that needs no relative pose: B's origin
+//! moved in A's frame by `|Δ(R_aᵀ (t_b − t_a))|`, and the relative turn is at most the
+//! two bodies' own turns, whose chords `2 sin(θ/2)` are at most `2 |q − q_built|`, so
+//! `drift ≤ |Δ(R_aᵀ (t_b − t_a))| + 2 (|Δq_a| + |Δq_b|) R_b`. A resting pair passes it
+//! for a matrix product, three square roots and no quaternion product; a pair it refuses
+//! takes the exact test above (a pair turning together, whose relative pose stays put).
 //!
 //! ## Lever arms kept from the build
 //!
@@ -140,7 +148,6 @@ use crate::dynamics::broad_phase::may_collide;
 use crate::dynamics::events::{push_event, Event, StepReport};
 use crate::dynamics::mid_phase;
 use crate::dynamics::pool::Pool;
-use crate::math::lanes::{Pose4, V4};
 use crate::math::{scalar, Iso, Quat, Vec3};
 use crate::shape::{Shape, Sphere};
 
@@ -683,7 +690,7 @@ fn update_group(
     };
     if reusable {
         for c in group.iter_mut() {
-            reuse(c, a, b, cfg, None);
+            reuse(c, a, b, cfg);
         }
         // A group that starts touching on a reuse is due its hit, as a rebuilt one is:
         // the closing speeds of its points, which only then are read.
@@ -812,6 +819,12 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         keep_patch_in_plane(c);
         return;
     }
+    // A convex pair that barely moved: the reuse test from the bodies' own poses, before
+    // any relative pose is formed (module docs, "Manifold reuse").
+    if !c.is_part() && convex_reusable(c, body_a, body_b, cfg.speculative_margin + reach) {
+        reuse(c, body_a, body_b, cfg);
+        return;
+    }
     let Some(plan) = plan(c, body_a, body_b, cfg, reach, None) else {
         c.len = 0;
         c.touching = false;
@@ -823,10 +836,7 @@ fn narrow_phase(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &Wor
         Some(_) => plan.shape_b.bounding_radius(),
     };
     if plan.reusable(c, radius_b, body_a, body_b) {
-        // A convex pair's anchors are in its bodies' frames, whose relative pose the
-        // reuse test formed: its separations are measured in A's frame.
-        let b_in_a = plan.parts.is_none().then_some(&plan.b_in_a);
-        reuse(c, body_a, body_b, cfg, b_in_a);
+        reuse(c, body_a, body_b, cfg);
     } else {
         let old_points = c.points;
         let old = old_points.get(..usize::from(c.len)).unwrap_or(&[]);
@@ -1165,19 +1175,54 @@ fn placed(body: &Iso, part: Option<&Iso>) -> Iso {
 /// passes.
 #[inline(always)]
 fn arms_kept(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, slack: f32) -> bool {
-    let kept = |built: Quat, body: &Body<'_>| {
-        if body.kind == BodyKind::Static {
-            return true;
-        }
-        let q = body.pose().rotation;
-        let (dx, dy, dz, dw) = (q.x - built.x, q.y - built.y, q.z - built.z, q.w - built.w);
-        let turn2 = ((dx * dx + dy * dy) + dz * dz) + dw * dw;
-        let offset = body.center_local.abs();
-        let reach = body.bounding_radius + ((offset.x + offset.y) + offset.z);
-        4.0 * turn2 * (reach * reach) <= slack * slack
-    };
+    let kept = |built: Quat, body: &Body<'_>| arm_kept(turn2(built, body), body, slack);
     // An empty manifold keeps no arms.
     c.len == 0 || (kept(c.built_rot_a, body_a) && kept(c.built_rot_b, body_b))
+}
+
+/// `|q − q_built|²` of `body`'s rotation `q` now against `built`: `4 sin²(θ/4)` for a
+/// turn by θ since (when the two quaternions lie in one hemisphere; larger otherwise).
+#[inline(always)]
+fn turn2(built: Quat, body: &Body<'_>) -> f32 {
+    let q = body.pose().rotation;
+    let (dx, dy, dz, dw) = (q.x - built.x, q.y - built.y, q.z - built.z, q.w - built.w);
+    ((dx * dx + dy * dy) + dz * dz) + dw * dw
+}
+
+/// [`arms_kept`] for one body that turned by `turn2` ([`turn2`]) since the build.
+#[inline(always)]
+fn arm_kept(turn2: f32, body: &Body<'_>, slack: f32) -> bool {
+    if body.kind == BodyKind::Static {
+        return true;
+    }
+    let offset = body.center_local.abs();
+    let reach = body.bounding_radius + ((offset.x + offset.y) + offset.z);
+    4.0 * turn2 * (reach * reach) <= slack * slack
+}
+
+/// The reuse test of a convex pair (module docs, "Manifold reuse") from the bodies' own
+/// poses, with this step's `margin`: no relative pose and no quaternion product. B's
+/// points moved in A's frame, since the build, by at most `|Δt| + (c_a + c_b) R_b`:
+/// `Δt` the change of B's origin in A's frame, `R_aᵀ (t_b − t_a)` now against the
+/// build's, and `c = 2 |q − q_built|` bounds each body's turn chord `2 sin(θ/2)`
+/// (`|q − q_built| = 2 sin(θ/4) ≥ sin(θ/2)`), the relative turn being at most the two
+/// turns together. A looser bound than [`Plan::reusable`]'s (which the caller tries
+/// when this one fails): both bound the same drift, so either passing is enough. The
+/// lever arms as [`arms_kept`].
+#[inline]
+fn convex_reusable(c: &Contact, body_a: &Body<'_>, body_b: &Body<'_>, margin: f32) -> bool {
+    if c.built_margin < 0.0 {
+        return false;
+    }
+    let slack = reuse_slack(&body_a.shape, &body_b.shape);
+    let d = body_b.pose().position - body_a.pose().position;
+    let moved = (body_a.rotation_matrix().transpose_mul_vec(d) - c.built_pose.position).length();
+    let (turn_a, turn_b) = (turn2(c.built_rot_a, body_a), turn2(c.built_rot_b, body_b));
+    let chords = 2.0 * (scalar::sqrt(turn_a) + scalar::sqrt(turn_b));
+    let drift = moved + chords * body_b.bounding_radius;
+    let arms =
+        || c.len == 0 || (arm_kept(turn_a, body_a, slack) && arm_kept(turn_b, body_b, slack));
+    drift <= slack && margin + drift <= c.built_margin && arms()
 }
 
 /// An upper bound (m) on how far any point of B (within `radius_b` of B's origin) moved
@@ -1192,47 +1237,22 @@ fn relative_drift(from: &Iso, to: &Iso, radius_b: f32) -> f32 {
 }
 
 /// The manifold at the current poses: same points and impulses, separations and the
-/// world normal recomputed (module docs). For a convex pair `b_in_a` is B's pose in A's
-/// frame (the reuse test's): each separation is then measured in A's frame, `(T l_b −
-/// l_a)·n_A` with `T` = `b_in_a` and `n_A` the normal in A's frame, one rotation per
-/// point; a part contact (`None`: its parts' frames are not its bodies') measures in the
-/// world frame, `(R_b l_b + t_b − R_a l_a − t_a)·n`.
-fn reuse(
-    c: &mut Contact,
-    body_a: &Body<'_>,
-    body_b: &Body<'_>,
-    cfg: &WorldConfig,
-    b_in_a: Option<&Iso>,
-) {
-    let n = body_a.pose().transform_vector(c.normal_local);
-    c.normal = n;
+/// world normal recomputed (module docs). A contact's anchors are in its bodies' frames
+/// (a part contact's too) and its normal in A's, so with the rotation matrices the
+/// bodies keep, `n = R_a n_A` and `(R_b l_b + t_b − R_a l_a − t_a)·n = (R_bᵀ n)·l_b −
+/// n_A·l_a + n·(t_b − t_a)`: two matrix products per contact and two dot products per
+/// point.
+fn reuse(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>, cfg: &WorldConfig) {
     let was_touching = c.touching;
     c.touching = false;
-    let len = usize::from(c.len);
-    match b_in_a {
-        Some(rel) if len == 4 => {
-            // A full manifold (a face on a face): the four points side by side.
-            let separations = separations_in_a(c, rel);
-            for (p, s) in c.points.iter_mut().zip(separations) {
-                p.separation = s;
-                c.touching |= s <= cfg.slop;
-            }
-        }
-        Some(rel) => {
-            let n_a = c.normal_local;
-            for p in c.points.iter_mut().take(len) {
-                p.separation = (rel.transform_point(p.local_b) - p.local_a).dot(n_a);
-                c.touching |= p.separation <= cfg.slop;
-            }
-        }
-        None => {
-            for p in c.points.iter_mut().take(len) {
-                let p_a = body_a.pose().transform_point(p.local_a);
-                let p_b = body_b.pose().transform_point(p.local_b);
-                p.separation = (p_b - p_a).dot(n);
-                c.touching |= p.separation <= cfg.slop;
-            }
-        }
+    let n_a = c.normal_local;
+    let n = body_a.rotation_matrix().mul_vec(n_a);
+    c.normal = n;
+    let n_b = body_b.rotation_matrix().transpose_mul_vec(n);
+    let along = n.dot(body_b.pose().position - body_a.pose().position);
+    for p in c.points.iter_mut().take(usize::from(c.len)) {
+        p.separation = (n_b.dot(p.local_b) - n_a.dot(p.local_a)) + along;
+        c.touching |= p.separation <= cfg.slop;
     }
     // Closing speeds are read by hit events only: a convex pair with points is due one
     // when it starts touching (`update_one`); a part contact when its group starts
@@ -1255,20 +1275,6 @@ fn set_approach_speeds(c: &mut Contact, body_a: &Body<'_>, body_b: &Body<'_>) {
         let v_b = body_b.linear_velocity + body_b.angular_velocity.cross(mid - center_b);
         p.approach_speed = (v_a - v_b).dot(n);
     }
-}
-
-/// The separations `(T l_b − l_a)·n_A` of `c`'s points (m) in A's frame (`T` = `b_in_a`,
-/// B's pose in A's frame; `n_A` the normal in A's frame): the four point slots side by
-/// side, one per lane (the slots past the count are not read), each lane the scalar
-/// `Iso::transform_point` and `Vec3::dot` to the bit, as [`reuse`] forms them one at a
-/// time for fewer points.
-#[inline]
-fn separations_in_a(c: &Contact, b_in_a: &Iso) -> [f32; 4] {
-    let [p0, p1, p2, p3] = &c.points;
-    let local_a = V4::from_lanes([p0.local_a, p1.local_a, p2.local_a, p3.local_a]);
-    let local_b = V4::from_lanes([p0.local_b, p1.local_b, p2.local_b, p3.local_b]);
-    let p_b = Pose4::splat(b_in_a).transform_point(&local_b);
-    p_b.sub(&local_a).dot(&V4::splat(c.normal_local)).0
 }
 
 /// Fill `c` (no points yet) from a manifold: world and local normal, body-frame anchors,
@@ -1533,6 +1539,7 @@ fn fastest_point(c: &Contact) -> Option<&ContactPoint> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::vec64::Vec64;
 
     /// The fields every pass over the contacts reads (the pair, the point count, the
     /// flags) lie in the first 24 bytes (one cache line unless the contact starts in
@@ -1657,39 +1664,155 @@ mod tests {
         c
     }
 
-    /// A reuse's separations in A's frame, the points side by side, are the scalar
-    /// `(T l_b − l_a)·n_A` to the bit, for every point count; and they agree with the
-    /// world frame's `(p_b − p_a)·n` to rounding.
+    /// Body point `l` (body frame) in the world, in f64, through the body's rotation
+    /// matrix.
+    fn in_world(body: &Body<'_>, l: Vec3) -> Vec64 {
+        let r = body.rotation_matrix();
+        let (x, y, z) = (Vec64::of(r.x), Vec64::of(r.y), Vec64::of(r.z));
+        let (lx, ly, lz) = (f64::from(l.x), f64::from(l.y), f64::from(l.z));
+        let scaled = |v: Vec64, s: f64| Vec64 {
+            x: v.x * s,
+            y: v.y * s,
+            z: v.z * s,
+        };
+        scaled(x, lx) + scaled(y, ly) + scaled(z, lz) + Vec64::of(body.pose().position)
+    }
+
+    /// A reuse measures its separations with the bodies' rotation matrices: they agree with the world frame's `(p_b − p_a)·n`, formed in f64 from the poses'
+    /// quaternions, to rounding, for every point count; the world normal is `R_a n_A`
+    /// and the touching flag follows the separations.
     #[test]
-    fn reused_separations_in_a_match_the_scalar_formula_bit_for_bit() {
+    fn reused_separations_follow_the_bodies_poses() {
+        use crate::dynamics::body::BodyDesc;
+        let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+        let cfg = WorldConfig::DEFAULT;
+        let mut a = Body::from_desc_anywhere(&BodyDesc::dynamic(cube)).unwrap();
+        let mut b = a;
         let mut rng = crate::rng::SplitMix64::new(41);
+        let mut touching = [0u32; 2];
         for round in 0..500 {
             let pose = |rng: &mut crate::rng::SplitMix64| {
                 Iso::new(rng.unit_vector() * rng.range(-20.0, 20.0), rng.rotation())
             };
-            let (pose_a, pose_b) = (pose(&mut rng), pose(&mut rng));
+            a.place(pose(&mut rng));
+            b.place(pose(&mut rng));
             let len = round % 5;
             let points: [ContactPoint; 4] = core::array::from_fn(|j| {
                 let v = |rng: &mut crate::rng::SplitMix64| rng.unit_vector() * rng.range(0.0, 0.9);
                 point(j as u64, v(&mut rng), v(&mut rng), 0.0)
             });
             let mut c = contact(points.get(..len).unwrap());
-            let n = rng.unit_vector();
-            c.normal_local = pose_a.inverse_transform_vector(n);
-            let rel = pose_a.inv_mul(&pose_b);
-            let got = separations_in_a(&c, &rel);
-            for (j, p) in c.points().iter().enumerate() {
-                let want = (rel.transform_point(p.local_b) - p.local_a).dot(c.normal_local);
-                assert_eq!(got[j].to_bits(), want.to_bits(), "round {round} point {j}");
-                let world =
-                    (pose_b.transform_point(p.local_b) - pose_a.transform_point(p.local_a)).dot(n);
+            c.normal_local = rng.unit_vector();
+            reuse(&mut c, &a, &b, &cfg);
+            let n = a.pose().transform_vector(c.normal_local);
+            assert!((c.normal - n).length() < 1e-6, "round {round}");
+            let world = |body: &Body<'_>, l: Vec3| in_world(body, l);
+            for p in c.points() {
+                let gap = world(&b, p.local_b) - world(&a, p.local_a);
+                let want = gap.dot(Vec64::of(n));
                 assert!(
-                    (got[j] - world).abs() < 2e-5,
-                    "round {round}: {} against {world}",
-                    got[j]
+                    (f64::from(p.separation) - want).abs() < 2e-5,
+                    "round {round}: {} against {want}",
+                    p.separation
                 );
             }
+            let any = c.points().iter().any(|p| p.separation <= cfg.slop);
+            assert_eq!(c.touching, any, "round {round}");
+            if len > 0 {
+                touching[usize::from(any)] += 1;
+            }
         }
+        // Random poses rarely touch: a few pairs placed to, below.
+        let (mut a, mut b) = (a, b);
+        a.place(Iso::IDENTITY);
+        b.place(Iso::from_position(Vec3::new(0.0, 1.0 - 0.002, 0.0)));
+        let mut c = contact(&[point(
+            0,
+            Vec3::new(0.5, 0.5, 0.5),
+            Vec3::new(0.5, -0.5, 0.5),
+            0.0,
+        )]);
+        c.normal_local = Vec3::Y;
+        reuse(&mut c, &a, &b, &cfg);
+        assert!((c.points[0].separation + 0.002).abs() < 1e-6 && c.touching);
+        assert!(touching[0] > 100, "{touching:?}");
+    }
+
+    /// The convex pair's own reuse test (`convex_reusable`) is a bound: whenever it
+    /// passes, no point of B within its bounding radius moved farther than the slack in
+    /// A's frame since the build (a brute-force look at B's corners and at points on its
+    /// bounding sphere, in f64), and the kept lever arms hold (`arms_kept`). Random moves
+    /// and turns of both bodies, up to about twice the bounds: both answers come up.
+    #[test]
+    fn the_convex_reuse_test_bounds_every_points_drift() {
+        use crate::dynamics::body::BodyDesc;
+        use crate::math::Quat;
+        let cube = Shape::cuboid(Vec3::splat(0.5)).unwrap();
+        let cfg = WorldConfig::DEFAULT;
+        let a0 =
+            Body::from_desc_anywhere(&BodyDesc::dynamic(cube).position(Vec3::new(3.0, -2.0, 1.0)))
+                .unwrap();
+        let b0 = Body::from_desc_anywhere(
+            &BodyDesc::dynamic(cube).position(Vec3::new(3.1, -1.001, 1.05)),
+        )
+        .unwrap();
+        let mut c = Contact::new_pair(0, 1, Material::DEFAULT, false);
+        let p = plan(&c, &a0, &b0, &cfg, 0.0, None).unwrap();
+        assert!(build(&mut c, &p, &a0, &b0, &cfg));
+        let slack = reuse_slack(&cube, &cube);
+        let radius = b0.bounding_radius;
+        let mut rng = crate::rng::SplitMix64::new(9);
+        let mut probes = [Vec3::ZERO; 64];
+        for (k, q) in probes.iter_mut().enumerate() {
+            *q = if k < 8 {
+                let s = |bit: usize| if k & bit == 0 { -0.5 } else { 0.5 };
+                Vec3::new(s(1), s(2), s(4))
+            } else {
+                rng.unit_vector() * radius
+            };
+        }
+        // B's point `l` in A's frame, in f64.
+        let in_a = |a: &Body<'_>, b: &Body<'_>, l: Vec3| {
+            let d = in_world(b, l) - Vec64::of(a.pose().position);
+            let r = a.rotation_matrix();
+            let col = |v: Vec3| Vec64::of(v).dot(d);
+            Vec64 {
+                x: col(r.x),
+                y: col(r.y),
+                z: col(r.z),
+            }
+        };
+        let (mut passed, mut failed) = (0, 0);
+        for _ in 0..2000 {
+            let (mut a, mut b) = (a0, b0);
+            for body in [&mut a, &mut b] {
+                let shift = rng.unit_vector() * rng.range(0.0, 0.6 * slack);
+                let turn = Quat::from_axis_angle(rng.unit_vector(), rng.range(0.0, 1.2 * slack));
+                let pose = *body.pose();
+                body.place(Iso::new(
+                    pose.position + shift,
+                    (turn * pose.rotation).normalize(),
+                ));
+            }
+            if !convex_reusable(&c, &a, &b, cfg.speculative_margin) {
+                failed += 1;
+                continue;
+            }
+            passed += 1;
+            assert!(arms_kept(&c, &a, &b, slack));
+            for &l in &probes {
+                let moved = libm::sqrt((in_a(&a, &b, l) - in_a(&a0, &b0, l)).length_squared());
+                assert!(moved <= f64::from(slack) + 1e-5, "a point moved {moved} m");
+            }
+        }
+        assert!(
+            passed > 200 && failed > 200,
+            "{passed} passed, {failed} failed"
+        );
+        // Never built, or built too narrow for this margin: no reuse.
+        let fresh = Contact::new_pair(0, 1, Material::DEFAULT, false);
+        assert!(!convex_reusable(&fresh, &a0, &b0, cfg.speculative_margin));
+        assert!(!convex_reusable(&c, &a0, &b0, c.built_margin + 1e-3));
     }
 
     /// A pair that turns together keeps its relative pose, but the reuse test refuses

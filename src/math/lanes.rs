@@ -14,7 +14,7 @@
 
 use core::ops::{Add, AddAssign, Mul, Neg, Sub, SubAssign};
 
-use super::{scalar, Iso, Mat3, Vec3};
+use super::{scalar, Mat3, Vec3};
 
 /// Four `f32` lanes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -317,17 +317,6 @@ impl V4 {
         Vec3::new(self.x.lane(l), self.y.lane(l), self.z.lane(l))
     }
 
-    /// The four vectors as lanes 0 to 3.
-    #[inline]
-    pub fn from_lanes(v: [Vec3; 4]) -> V4 {
-        let [a, b, c, d] = v;
-        V4 {
-            x: F4([a.x, b.x, c.x, d.x]),
-            y: F4([a.y, b.y, c.y, d.y]),
-            z: F4([a.z, b.z, c.z, d.z]),
-        }
-    }
-
     /// Set lane `l`.
     #[inline]
     pub fn set(&mut self, l: usize, v: Vec3) {
@@ -470,44 +459,6 @@ impl M4 {
     }
 }
 
-/// A pose per lane: the rotation as a quaternion and the translation.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Pose4 {
-    u: V4,
-    w: F4,
-    position: V4,
-}
-
-impl Pose4 {
-    /// `pose` in every lane.
-    #[inline]
-    pub fn splat(pose: &Iso) -> Pose4 {
-        Pose4 {
-            u: V4::splat(pose.rotation.xyz()),
-            w: F4::splat(pose.rotation.w),
-            position: V4::splat(pose.position),
-        }
-    }
-
-    /// Set lane `l` to the rotation `q` and the translation `position`.
-    #[cfg(test)]
-    pub fn set(&mut self, l: usize, q: super::Quat, position: Vec3) {
-        self.u.set(l, q.xyz());
-        self.w.set(l, q.w);
-        self.position.set(l, position);
-    }
-
-    /// `R p + t` per lane, as [`Iso::transform_point`] (`Quat::rotate`: `t = 2 u × p`,
-    /// `p + w t + u × t`).
-    #[inline(always)]
-    pub fn transform_point(&self, p: &V4) -> V4 {
-        let t = self.u.cross(p).scale(F4::splat(2.0));
-        p.add(&t.scale(self.w))
-            .add(&self.u.cross(&t))
-            .add(&self.position)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -639,36 +590,6 @@ mod tests {
             let r = x.recip_or_zero();
             for l in 0..4 {
                 assert_eq!(r.lane(l).to_bits(), inverse_or_zero(x.lane(l)).to_bits());
-            }
-        }
-    }
-
-    /// A pose per lane places each lane's point as `Iso::transform_point` does, to the
-    /// bit, whether the lanes share one pose (`splat`) or hold four (`set`).
-    #[test]
-    fn pose_lanes_transform_points_as_the_scalar_pose() {
-        let mut rng = crate::rng::SplitMix64::new(23);
-        for _ in 0..1000 {
-            let poses: [Iso; 4] = core::array::from_fn(|_| {
-                Iso::new(rng.unit_vector() * rng.range(-50.0, 50.0), rng.rotation())
-            });
-            let points: [Vec3; 4] =
-                core::array::from_fn(|_| rng.unit_vector() * rng.range(-3.0, 3.0));
-            let mut each = Pose4::default();
-            for (l, pose) in poses.iter().enumerate() {
-                each.set(l, pose.rotation, pose.position);
-            }
-            let lanes = V4::from_lanes(points);
-            let placed = each.transform_point(&lanes);
-            let shared = Pose4::splat(&poses[0]).transform_point(&lanes);
-            for l in 0..4 {
-                let want = poses[l].transform_point(points[l]);
-                let want_shared = poses[0].transform_point(points[l]);
-                for (got, want) in [(placed.lane(l), want), (shared.lane(l), want_shared)] {
-                    assert_eq!(got.x.to_bits(), want.x.to_bits());
-                    assert_eq!(got.y.to_bits(), want.y.to_bits());
-                    assert_eq!(got.z.to_bits(), want.z.to_bits());
-                }
             }
         }
     }
