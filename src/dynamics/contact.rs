@@ -1678,9 +1678,11 @@ mod tests {
         scaled(x, lx) + scaled(y, ly) + scaled(z, lz) + Vec64::of(body.pose().position)
     }
 
-    /// A reuse measures its separations with the bodies' rotation matrices: they agree with the world frame's `(p_b − p_a)·n`, formed in f64 from the poses'
-    /// quaternions, to rounding, for every point count; the world normal is `R_a n_A`
-    /// and the touching flag follows the separations.
+    /// A reuse measures its separations with the bodies' rotation matrices, rearranged
+    /// (`(R_bᵀ n)·l_b − n_A·l_a + n·(t_b − t_a)`): they agree with the world formula
+    /// `(R_b l_b + t_b − R_a l_a − t_a)·n` formed in f64 to rounding, for every point
+    /// count; the world normal is A's quaternion turning `n_A`, to rounding; and the
+    /// touching flag follows the separations.
     #[test]
     fn reused_separations_follow_the_bodies_poses() {
         use crate::dynamics::body::BodyDesc;
