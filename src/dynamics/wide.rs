@@ -1049,24 +1049,20 @@ fn solve_with<const C: usize>(
             let (g, bodies) = (&mut group, &mut *bodies);
             let full = !overflow && *mask == ALL_LANES;
             if skips {
-                skip_torque_free(g, bodies, a, *mask, (full, rows, still_a), bouncy);
+                skip_torque_free(g, bodies, a, *mask, (full, rows), bouncy);
                 continue;
             }
-            let all = (ALL_LANES, ALL_LANES, 4);
-            match (full, rows, bouncy, still_a) {
-                (true, 1, false, false) => solve_group::<1, false, true, true>(g, bodies, a, all),
-                (true, 2, false, false) => solve_group::<2, false, true, true>(g, bodies, a, all),
-                (true, _, false, false) => solve_group::<4, false, true, true>(g, bodies, a, all),
-                (true, 1, true, false) => solve_group::<1, true, true, true>(g, bodies, a, all),
-                (true, 2, true, false) => solve_group::<2, true, true, true>(g, bodies, a, all),
-                (true, _, true, false) => solve_group::<4, true, true, true>(g, bodies, a, all),
-                (true, 1, false, true) => solve_group::<1, false, true, false>(g, bodies, a, all),
-                (true, 2, false, true) => solve_group::<2, false, true, false>(g, bodies, a, all),
-                (true, _, false, true) => solve_group::<4, false, true, false>(g, bodies, a, all),
-                (true, 1, true, true) => solve_group::<1, true, true, false>(g, bodies, a, all),
-                (true, 2, true, true) => solve_group::<2, true, true, false>(g, bodies, a, all),
-                (true, _, true, true) => solve_group::<4, true, true, false>(g, bodies, a, all),
-                _ => solve_group::<4, true, true, true>(g, bodies, a, (*mask, *mask, rows)),
+            let all = (ALL_LANES, ALL_LANES, 4, bouncy);
+            // One arm per kernel: each arm is an inlined copy (kilobytes of flash on a
+            // Cortex-M), so restitution is a flag, not a copy.
+            match (full, rows, still_a) {
+                (true, 1, false) => solve_group::<1, true, true>(g, bodies, a, all),
+                (true, 2, false) => solve_group::<2, true, true>(g, bodies, a, all),
+                (true, _, false) => solve_group::<4, true, true>(g, bodies, a, all),
+                (true, 1, true) => solve_group::<1, true, false>(g, bodies, a, all),
+                (true, 2, true) => solve_group::<2, true, false>(g, bodies, a, all),
+                (true, _, true) => solve_group::<4, true, false>(g, bodies, a, all),
+                _ => solve_group::<4, true, true>(g, bodies, a, (*mask, *mask, rows, true)),
             }
         }
         if a.2.last && !any_deep {
@@ -1089,20 +1085,18 @@ fn skip_torque_free(
     bodies: &mut [SolverBody],
     a: (&WorldConfig, f32, Pass),
     mask: [bool; 4],
-    (full, rows, still_a): (bool, usize, bool),
+    (full, rows): (bool, usize),
     bouncy: bool,
 ) {
     let free = g.torque_free();
     let rubs: [bool; 4] = core::array::from_fn(|l| {
         mask.get(l).copied().unwrap_or(false) && !free.get(l).copied().unwrap_or(false)
     });
-    let none = (ALL_LANES, NO_LANES, 1);
-    match (full && rows == 1 && rubs == NO_LANES, bouncy, still_a) {
-        (true, false, false) => solve_group::<1, false, false, true>(g, bodies, a, none),
-        (true, true, false) => solve_group::<1, true, false, true>(g, bodies, a, none),
-        (true, false, true) => solve_group::<1, false, false, false>(g, bodies, a, none),
-        (true, true, true) => solve_group::<1, true, false, false>(g, bodies, a, none),
-        _ => solve_group::<4, true, true, true>(g, bodies, a, (mask, rubs, rows)),
+    let none = (ALL_LANES, NO_LANES, 1, bouncy);
+    if full && rows == 1 && rubs == NO_LANES {
+        solve_group::<1, false, true>(g, bodies, a, none);
+    } else {
+        solve_group::<4, true, true>(g, bodies, a, (mask, rubs, rows, true));
     }
 }
 
@@ -1175,19 +1169,20 @@ pub(crate) fn still_a_for_tests(group: &Group<'_>) -> bool {
 /// One pass over one group (`solve`'s arguments in `(cfg, inv_h, pass)`) in the lanes
 /// `mask`: the first `rows` of its `ROWS` point rows (a full group's kernel has `rows =
 /// ROWS`; the masked kernel's `ROWS` is 4 and `rows` the group's own count, past which no
-/// lane holds a point), with `BOUNCY` the records the restitution pass reads (the closing
+/// lane holds a point), with `bouncy` the records the restitution pass reads (the closing
 /// speed at impact and the impulse so far; a group without restitution in any lane skips
-/// them, as that pass never reads its lanes), and with `RUB` the friction, twist and
+/// them, as that pass never reads its lanes; a flag and not a copy of the kernel, tested
+/// once after the rows), and with `RUB` the friction, twist and
 /// rolling rows of the lanes `rubs`. Without `MOVES_A`, for a group whose body A stays
 /// still in every lane ([`Group::still_a`]): its velocities are zero and stay zero, and
 /// the kernel leaves out every term of A (see [`Bodies4::STILL`] for why the bits are
 /// the same).
 #[inline(always)]
-fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool, const MOVES_A: bool>(
+fn solve_group<const ROWS: usize, const RUB: bool, const MOVES_A: bool>(
     group: &mut Group<'_>,
     bodies: &mut [SolverBody],
     (cfg, inv_h, pass): (&WorldConfig, f32, Pass),
-    (mask, rubs, rows): ([bool; 4], [bool; 4], usize),
+    (mask, rubs, rows, bouncy): ([bool; 4], [bool; 4], usize, bool),
 ) {
     let rows = rows.min(ROWS);
     let ia = group.s0.idx;
@@ -1252,6 +1247,8 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool, const MOV
     };
     let mass_sum = sh.ma + sh.mb;
     let mut pushed = zero;
+    // Each row's closing speed and added impulse, for the restitution records.
+    let mut records = [(zero, zero); ROWS];
     for j in 0..rows {
         let p = group.point_mut(j);
         // This pass's separation in the lanes of `mask` (the others' rows are dropped).
@@ -1280,12 +1277,19 @@ fn solve_group<const ROWS: usize, const BOUNCY: bool, const RUB: bool, const MOV
         total += new;
         levers += new * p.twist_arm;
         p.normal_impulse = new;
-        if BOUNCY {
+        if let Some(r) = records.get_mut(j) {
+            *r = (vn, delta);
+        }
+    }
+    if bouncy {
+        for (j, &(vn, delta)) in records.iter().enumerate().take(rows) {
             // The speed at impact, for restitution: the closing speed the point had when
             // it first pushed this step (it includes the gravity of the sub-steps
             // before). Per lane: if (in the mask) the point had not pushed before (total
             // 0), pushes now (delta > 0) and closes faster than recorded (vn < speed0),
-            // record vn.
+            // record vn. Each point's record reads its own row's numbers only, so it is
+            // kept after the rows, out of their loop.
+            let p = group.point_mut(j);
             let s0 = p.normal_speed0;
             let faster = s0.gt_select(vn, vn, s0);
             let pushes = delta.gt_select(zero, faster, s0);
