@@ -1250,6 +1250,42 @@ mod tests {
         assert!(moved_relax > free / 2, "{moved_relax} of {free}");
     }
 
+    /// The warm start and a soft and a last relax pass over the groups of `w` (planned),
+    /// the solver's way and `reference`'s, compared bit for bit: bodies and groups.
+    fn solve_both_ways(
+        w: &World<'static, 64, 512, 64>,
+        cfg: &WorldConfig,
+        h: f32,
+        reference: wide::Reference,
+        step: usize,
+    ) {
+        let store = &w.solver.store;
+        for use_bias in [true, false] {
+            let pass = wide::Pass {
+                use_bias,
+                moved: true,
+                last: !use_bias,
+            };
+            let (mut store_a, mut bodies_a) = (store.clone(), w.solver.bodies.clone());
+            wide::warm_start(&mut store_a, &mut bodies_a);
+            wide::solve(&mut store_a, &mut bodies_a, cfg, 1.0 / h, pass);
+            let (mut store_b, mut bodies_b) = (store.clone(), w.solver.bodies.clone());
+            let (sb, bb) = (&mut store_b, &mut bodies_b);
+            wide::warm_start_and_solve_as(reference, sb, bb, cfg, 1.0 / h, pass);
+            // Debug output tells -0.0 from 0.0 and shows NaN: a bitwise comparison.
+            assert_eq!(
+                std::format!("{:?}", bodies_a),
+                std::format!("{:?}", bodies_b),
+                "step {step}"
+            );
+            assert_eq!(
+                std::format!("{:?}", store_a),
+                std::format!("{:?}", store_b),
+                "step {step}"
+            );
+        }
+    }
+
     /// Overflow groups solved in runs of lanes without a shared body give the bits of the
     /// same groups solved one lane at a time: the warm start and a soft and a relax pass
     /// over a world's groups both ways, its bodies compared bit for bit, at steps where
@@ -1272,35 +1308,7 @@ mod tests {
                 shared_runs += usize::from(n < active);
                 split_groups += usize::from(n > 1);
             }
-            for use_bias in [true, false] {
-                let pass = wide::Pass {
-                    use_bias,
-                    moved: true,
-                    last: !use_bias,
-                };
-                let (mut store_a, mut bodies_a) = (store.clone(), w.solver.bodies.clone());
-                wide::warm_start(&mut store_a, &mut bodies_a);
-                wide::solve(&mut store_a, &mut bodies_a, &cfg, 1.0 / h, pass);
-                let (mut store_b, mut bodies_b) = (store.clone(), w.solver.bodies.clone());
-                wide::warm_start_and_solve_lane_by_lane(
-                    &mut store_b,
-                    &mut bodies_b,
-                    &cfg,
-                    1.0 / h,
-                    pass,
-                );
-                // Debug output tells -0.0 from 0.0 and shows NaN: a bitwise comparison.
-                assert_eq!(
-                    std::format!("{:?}", bodies_a),
-                    std::format!("{:?}", bodies_b),
-                    "step {step}"
-                );
-                assert_eq!(
-                    std::format!("{:?}", store_a),
-                    std::format!("{:?}", store_b),
-                    "step {step}"
-                );
-            }
+            solve_both_ways(&w, &cfg, h, wide::Reference::LaneByLane, step);
             world.step();
         }
         assert!(
@@ -1332,35 +1340,7 @@ mod tests {
                 still += usize::from(full && a_still);
                 moving += usize::from(full && !a_still);
             }
-            for use_bias in [true, false] {
-                let pass = wide::Pass {
-                    use_bias,
-                    moved: true,
-                    last: !use_bias,
-                };
-                let (mut store_a, mut bodies_a) = (store.clone(), w.solver.bodies.clone());
-                wide::warm_start(&mut store_a, &mut bodies_a);
-                wide::solve(&mut store_a, &mut bodies_a, &cfg, 1.0 / h, pass);
-                let (mut store_b, mut bodies_b) = (store.clone(), w.solver.bodies.clone());
-                wide::warm_start_and_solve_with_a_moving(
-                    &mut store_b,
-                    &mut bodies_b,
-                    &cfg,
-                    1.0 / h,
-                    pass,
-                );
-                // Debug output tells -0.0 from 0.0 and shows NaN: a bitwise comparison.
-                assert_eq!(
-                    std::format!("{:?}", bodies_a),
-                    std::format!("{:?}", bodies_b),
-                    "step {step}"
-                );
-                assert_eq!(
-                    std::format!("{:?}", store_a),
-                    std::format!("{:?}", store_b),
-                    "step {step}"
-                );
-            }
+            solve_both_ways(&w, &cfg, h, wide::Reference::AMoving, step);
             world.step();
         }
         assert!(still > 100 && moving > 40, "{still} {moving}");

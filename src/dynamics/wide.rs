@@ -1132,32 +1132,32 @@ fn one_lane_at_a_time(active: [bool; 4], _: [u32; 4], _: [u32; 4]) -> Passes {
     (out, n)
 }
 
-/// [`warm_start`] then one [`solve`] pass with every overflow lane on its own, in lane
-/// order (the tests' reference).
+/// The tests' references for [`warm_start`] then one [`solve`] pass.
 #[cfg(test)]
-pub(crate) fn warm_start_and_solve_lane_by_lane<const C: usize>(
-    store: &mut WideStore<C>,
-    bodies: &mut [SolverBody],
-    cfg: &WorldConfig,
-    inv_h: f32,
-    pass: Pass,
-) {
-    warm_start_with(store, bodies, one_lane_at_a_time, true);
-    solve_with(store, bodies, (cfg, inv_h, pass), one_lane_at_a_time, true);
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Reference {
+    /// Every overflow lane on its own, in lane order.
+    LaneByLane,
+    /// The kernels of two moving bodies in every group, body A still or not.
+    AMoving,
 }
 
-/// [`warm_start`] then one [`solve`] pass with the kernels of two moving bodies in every
-/// group, body A still or not (the tests' reference for the kernels without A).
+/// [`warm_start`] then one [`solve`] pass the way `reference` says.
 #[cfg(test)]
-pub(crate) fn warm_start_and_solve_with_a_moving<const C: usize>(
+pub(crate) fn warm_start_and_solve_as<const C: usize>(
+    reference: Reference,
     store: &mut WideStore<C>,
     bodies: &mut [SolverBody],
     cfg: &WorldConfig,
     inv_h: f32,
     pass: Pass,
 ) {
-    warm_start_with(store, bodies, overflow_runs, false);
-    solve_with(store, bodies, (cfg, inv_h, pass), overflow_runs, false);
+    let (runs, still): (Runs, bool) = match reference {
+        Reference::LaneByLane => (one_lane_at_a_time, true),
+        Reference::AMoving => (overflow_runs, false),
+    };
+    warm_start_with(store, bodies, runs, still);
+    solve_with(store, bodies, (cfg, inv_h, pass), runs, still);
 }
 
 /// [`Group::still_a`] for the solver's tests.
