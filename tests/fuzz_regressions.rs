@@ -1707,3 +1707,33 @@ fn witnesses_on_a_sliver_of_the_difference_are_finished_in_f64() {
     let gap = (d.point_b - d.point_a).length();
     assert!((gap - d.distance).abs() < 1.0e-6, "{gap} {d:?}");
 }
+
+/// Root cause: a 3.89 m sphere whose centre lies inside a box 2.4 mm thick and 1 km wide:
+/// the cores' difference is thinner than EPA's tolerance there (1e-5 of the scale), so
+/// EPA answers "touching through a flat difference" at core depth 0, with GJK's simplex
+/// for witnesses. That simplex was a tetrahedron nearly as flat as the box, and its
+/// barycentric coordinates put the witness on the box 16 m across the normal from the
+/// one on the sphere's centre. Fix (`collide::epa::flat_witnesses`): the witnesses are
+/// the simplex's point over the origin seen along the flat normal, a convex combination
+/// from the widest triangle that holds the origin in the plane across the normal, so
+/// they differ along the normal only.
+#[test]
+fn touching_through_a_flat_difference_keeps_its_witnesses_together() {
+    // sphere-in-a-thin-box-flat-difference-03da1638 (narrow_phase, CI's seeded run at
+    // 2fecfd9; the narrow phase is 45540b3's).
+    let a = Shape::sphere(f(0x40790200)).unwrap();
+    let pa = pose(
+        v(0x8383f783, 0xc06e0800, 0xbe800000),
+        [0x3f19b79c, 0xbb22ff6d, 0x3f0731db, 0x3f19b79c],
+    );
+    let b = Shape::cuboid(v(0x3aa00000, 0x40bc0100, 0x44000000)).unwrap();
+    assert_cases(&[("03da1638", a, pa, b, Iso::IDENTITY, 0.0)]);
+    let unit = Iso::new(pa.position, pa.rotation.normalize());
+    let p = penetration(&a, &unit, &b, &Iso::IDENTITY).unwrap().unwrap();
+    // The points differ along the normal only (to a micrometre), and the one on the box
+    // is within its 1.2 mm half-thickness of the sphere's centre.
+    let gap = p.point_b - p.point_a + p.normal * p.depth;
+    let across = (gap - p.normal * p.normal.dot(gap)).length();
+    assert!(across < 1.0e-5, "{p:?}");
+    assert!((p.point_b - unit.position).length() < 1.3e-3, "{p:?}");
+}
