@@ -394,6 +394,12 @@ pub(crate) struct Body<'a> {
     /// Set when `fat` was replaced (or the body was added or teleported): the broad phase
     /// looks for the body's new pairs and clears it.
     pub moved: bool,
+    /// Set while the part lists of the body's pairs with meshes and compounds may have
+    /// changed since the mid phase last formed them (`mid_phase`, "Lists kept"): the
+    /// broad phase sets it with every `moved` it clears, and a new or restored body
+    /// starts with it; stage 4 clears it once it has placed every list whole. Derived
+    /// state: not in snapshots.
+    pub relist: bool,
     /// A box (world, m) around the shape at `pose` for the narrow phase's test of empty
     /// pairs ([`Body::refresh_bounds`]), formed each step: by the broad phase for the
     /// bodies whose movement bounds it forms (awake, not static), at the start of the
@@ -532,6 +538,7 @@ impl<'a> Body<'a> {
             pose0: pose,
             fat: d.shape.aabb(&pose),
             moved: true,
+            relist: true,
             bounds: d.shape.aabb(&pose),
         };
         b.update_inertia();

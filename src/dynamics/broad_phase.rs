@@ -331,6 +331,8 @@ impl<const N: usize> BroadPhase<N> {
         // deterministic.
         crate::sort::sort_pairs(pairs);
         for (i, b) in bodies.iter_mut() {
+            // The mid phase lists this body's part pairs again (`mid_phase`, "Lists kept").
+            b.relist |= b.moved;
             b.moved = retry.get(i).copied().unwrap_or(false);
         }
         report.dropped_pairs = report.dropped_pairs.saturating_add(dropped);

@@ -565,6 +565,7 @@ fn get_body<'a>(r: &mut Reader<'_>, refs: &ShapeLookup<'_, 'a>) -> R<Body<'a>> {
     b.pose0 = Iso::new(pose0.position, settle_rotation(pose0.rotation));
     b.fat = fat;
     b.moved = moved;
+    b.relist = true;
     b.sleep_time = sleep_time;
     b.awake = awake && kind != BodyKind::Static;
     if kind == BodyKind::Dynamic {
