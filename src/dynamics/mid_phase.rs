@@ -1027,6 +1027,26 @@ mod tests {
         pub(super) static KEPT: core::cell::Cell<u64> = const { core::cell::Cell::new(0) };
     }
 
+    /// Run `f` with the reference hulls and the terrain scenes' shapes, on a thread with
+    /// the stack their worlds need.
+    fn on_terrain(
+        f: impl FnOnce(&[ConvexHull], &crate::scenes::TerrainShapes<'_>) + Send + 'static,
+    ) {
+        use crate::scenes::{self, TerrainData};
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn(|| {
+                let mut hulls = std::vec![ConvexHull::UNIT_TETRAHEDRON; scenes::REFERENCE_HULLS];
+                scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
+                let mut terrain: std::boxed::Box<TerrainData> = std::boxed::Box::default();
+                let shapes = terrain.shapes().unwrap();
+                f(&hulls, &shapes);
+            })
+            .unwrap()
+            .join()
+            .unwrap();
+    }
+
     /// Kept lists ("Lists kept") against lists formed every step: on both terrain scenes
     /// (a height field and a mesh under 40 mixed bodies, both static) and on boxes and
     /// balls falling on the mesh as a kinematic body (whose lists are never kept), a
@@ -1035,89 +1055,80 @@ mod tests {
     /// the same contacts too, bit for bit); and the terrain worlds keep most lists.
     #[test]
     fn kept_part_lists_give_the_bits_of_lists_formed_every_step() {
-        use crate::scenes::{self, ReferenceWorld, Scene, TerrainData};
-        std::thread::Builder::new()
-            .stack_size(256 << 20)
-            .spawn(|| {
-                let mut hulls = std::vec![ConvexHull::UNIT_TETRAHEDRON; scenes::REFERENCE_HULLS];
-                scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
-                let mut terrain: std::boxed::Box<TerrainData> = std::boxed::Box::default();
-                let shapes = terrain.shapes().unwrap();
-                for scene in [Scene::Terrain, Scene::TerrainMesh] {
-                    let mut keeps: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
-                    keeps.set_config(scene.config()).unwrap();
-                    scene
-                        .build_on(&mut keeps, &hulls, shapes.ground(scene))
-                        .unwrap();
-                    let mut forms = keeps.clone();
-                    let (mut kept, mut listed) = (0u64, 0u64);
-                    for step in 0..300 {
-                        for (_, b) in forms.bodies.iter_mut() {
-                            b.relist = true;
-                        }
-                        let before = KEPT.with(|k| k.get());
-                        forms.step();
-                        assert_eq!(KEPT.with(|k| k.get()), before, "{scene:?} step {step}");
-                        keeps.step();
-                        kept += KEPT.with(|k| k.get()) - before;
-                        listed += keeps.contacts.iter().filter(|c| c.is_record()).count() as u64;
-                        let same = keeps.contacts.len() == forms.contacts.len()
-                            && keeps
-                                .contacts
-                                .iter()
-                                .zip(forms.contacts.iter())
-                                .all(|(x, y)| x.same_as(y));
-                        assert!(same, "{scene:?}: contacts differ after step {step}");
-                        assert_eq!(keeps.checksum(), forms.checksum(), "{scene:?} step {step}");
-                    }
-                    // Most records are of resting or slowly moving bodies whose boxes stay.
-                    assert!(
-                        kept * 2 > listed,
-                        "{scene:?}: {kept} of {listed} lists kept"
-                    );
-                    std::println!("{scene:?}: {kept} of {listed} lists kept");
-                }
-                // The mesh as a kinematic body gliding under boxes and balls: its pose
-                // moves every step, so no list of it is ever kept.
-                let mesh = shapes.ground(Scene::TerrainMesh).unwrap();
-                let mut keeps: std::boxed::Box<crate::World<'_, 64, 4096, 64>> =
-                    std::boxed::Box::default();
-                keeps
-                    .add(
-                        crate::BodyDesc::kinematic(mesh)
-                            .position(Vec3::new(-8.0, -1.0, -8.0))
-                            .velocity(Vec3::new(0.3, 0.0, 0.1)),
-                    )
+        use crate::scenes::{ReferenceWorld, Scene};
+        on_terrain(|hulls, shapes| {
+            for scene in [Scene::Terrain, Scene::TerrainMesh] {
+                let mut keeps: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
+                keeps.set_config(scene.config()).unwrap();
+                scene
+                    .build_on(&mut keeps, hulls, shapes.ground(scene))
                     .unwrap();
-                let cube = Shape::cuboid(Vec3::splat(0.3)).unwrap();
-                let ball = Shape::sphere(0.25).unwrap();
-                for i in 0..16 {
-                    let p = Vec3::new((i % 4) as f32 - 1.5, 2.5, (i / 4) as f32 - 1.5);
-                    let shape = if i % 2 == 0 { cube } else { ball };
-                    keeps
-                        .add(crate::BodyDesc::dynamic(shape).position(p))
-                        .unwrap();
-                }
                 let mut forms = keeps.clone();
-                let before = KEPT.with(|k| k.get());
-                for step in 0..200 {
+                let (mut kept, mut listed) = (0u64, 0u64);
+                for step in 0..300 {
                     for (_, b) in forms.bodies.iter_mut() {
                         b.relist = true;
                     }
+                    let before = KEPT.with(|k| k.get());
                     forms.step();
+                    assert_eq!(KEPT.with(|k| k.get()), before, "{scene:?} step {step}");
                     keeps.step();
-                    assert_eq!(keeps.checksum(), forms.checksum(), "kinematic step {step}");
+                    kept += KEPT.with(|k| k.get()) - before;
+                    listed += keeps.contacts.iter().filter(|c| c.is_record()).count() as u64;
+                    let same = keeps.contacts.len() == forms.contacts.len()
+                        && keeps
+                            .contacts
+                            .iter()
+                            .zip(forms.contacts.iter())
+                            .all(|(x, y)| x.same_as(y));
+                    assert!(same, "{scene:?}: contacts differ after step {step}");
+                    assert_eq!(keeps.checksum(), forms.checksum(), "{scene:?} step {step}");
                 }
-                assert!(keeps.contacts.iter().any(|c| c.is_part() && c.len > 0));
-                assert_eq!(
-                    KEPT.with(|k| k.get()),
-                    before,
-                    "a kinematic mesh's list kept"
+                // Most records are of resting or slowly moving bodies whose boxes stay.
+                assert!(
+                    kept * 2 > listed,
+                    "{scene:?}: {kept} of {listed} lists kept"
                 );
-            })
-            .unwrap()
-            .join()
-            .unwrap();
+                std::println!("{scene:?}: {kept} of {listed} lists kept");
+            }
+            // The mesh as a kinematic body gliding under boxes and balls: its pose
+            // moves every step, so no list of it is ever kept.
+            let mesh = shapes.ground(Scene::TerrainMesh).unwrap();
+            let mut keeps: std::boxed::Box<crate::World<'_, 64, 4096, 64>> =
+                std::boxed::Box::default();
+            keeps
+                .add(
+                    crate::BodyDesc::kinematic(mesh)
+                        .position(Vec3::new(-8.0, -1.0, -8.0))
+                        .velocity(Vec3::new(0.3, 0.0, 0.1)),
+                )
+                .unwrap();
+            let cube = Shape::cuboid(Vec3::splat(0.3)).unwrap();
+            let ball = Shape::sphere(0.25).unwrap();
+            for i in 0..16 {
+                let p = Vec3::new((i % 4) as f32 - 1.5, 2.5, (i / 4) as f32 - 1.5);
+                let shape = if i % 2 == 0 { cube } else { ball };
+                keeps
+                    .add(crate::BodyDesc::dynamic(shape).position(p))
+                    .unwrap();
+            }
+            let mut forms = keeps.clone();
+            let before = KEPT.with(|k| k.get());
+            for step in 0..200 {
+                for (_, b) in forms.bodies.iter_mut() {
+                    b.relist = true;
+                }
+                forms.step();
+                keeps.step();
+                assert_eq!(keeps.checksum(), forms.checksum(), "kinematic step {step}");
+            }
+            assert!(keeps.contacts.iter().any(|c| c.is_part() && c.len > 0));
+            assert_eq!(
+                KEPT.with(|k| k.get()),
+                before,
+                "a kinematic mesh's list kept"
+            );
+        });
     }
 
     /// The single-move update against the two-pass one, on both terrain scenes (a height
@@ -1128,87 +1139,75 @@ mod tests {
     /// anything, and the small buffer must send some to the two passes.
     #[test]
     fn the_single_move_update_is_the_two_pass_update() {
-        use crate::scenes::{self, ReferenceWorld, Scene, TerrainData};
-        std::thread::Builder::new()
-            .stack_size(256 << 20)
-            .spawn(|| {
-                let mut hulls = std::vec![ConvexHull::UNIT_TETRAHEDRON; scenes::REFERENCE_HULLS];
-                scenes::make_hulls(&mut hulls, scenes::SEED).unwrap();
-                let mut terrain: std::boxed::Box<TerrainData> = std::boxed::Box::default();
-                let shapes = terrain.shapes().unwrap();
-                fn compare<const B: usize, const C: usize, const E: usize>(
-                    world: &mut crate::World<'_, B, C, E>,
-                    steps: u32,
-                ) -> (u32, u32, u32) {
-                    let (mut changed, mut planned, mut fallback) = (0, 0, 0);
-                    for _ in 0..steps {
-                        // Stage 4's input: the enlarged boxes of this step (stage 2; the
-                        // step's own pass then finds nothing left to refresh).
-                        let cfg = *world.config();
-                        crate::dynamics::broad_phase::update_fat_boxes(&mut world.bodies, &cfg);
-                        // Stage 3's part: a body whose box moved lists its pairs again.
-                        for (_, b) in world.bodies.iter_mut() {
-                            b.relist |= b.moved;
-                        }
-                        let mut single = world.contacts.clone();
-                        let mut twice = world.contacts.clone();
-                        let (mut r1, mut r2) = (StepReport::default(), StepReport::default());
-                        let mut probe = world.contacts.clone();
-                        let mut list = HVec::new();
-                        let plan =
-                            plan_relocation(probe.as_mut_slice(), C, &world.bodies, &mut list);
-                        update_parts(&mut single, &world.bodies, &mut r1);
-                        update_parts_in_two_passes(&mut twice, &world.bodies, &mut r2);
-                        let same = |x: &[Contact], y: &[Contact]| {
-                            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| a.same_as(b))
-                        };
-                        assert!(same(&single, &twice), "step {}", world.step_count());
-                        assert_eq!(r1.dropped_contacts, r2.dropped_contacts);
-                        if !same(&twice, &world.contacts) {
-                            changed += 1;
-                            if plan.is_some() {
-                                planned += 1;
-                            } else {
-                                fallback += 1;
-                            }
-                        }
-                        world.step();
+        use crate::scenes::{ReferenceWorld, Scene};
+        on_terrain(|hulls, shapes| {
+            fn compare<const B: usize, const C: usize, const E: usize>(
+                world: &mut crate::World<'_, B, C, E>,
+                steps: u32,
+            ) -> (u32, u32, u32) {
+                let (mut changed, mut planned, mut fallback) = (0, 0, 0);
+                for _ in 0..steps {
+                    // Stage 4's input: the enlarged boxes of this step (stage 2; the
+                    // step's own pass then finds nothing left to refresh).
+                    let cfg = *world.config();
+                    crate::dynamics::broad_phase::update_fat_boxes(&mut world.bodies, &cfg);
+                    // Stage 3's part: a body whose box moved lists its pairs again.
+                    for (_, b) in world.bodies.iter_mut() {
+                        b.relist |= b.moved;
                     }
-                    (changed, planned, fallback)
+                    let mut single = world.contacts.clone();
+                    let mut twice = world.contacts.clone();
+                    let (mut r1, mut r2) = (StepReport::default(), StepReport::default());
+                    let mut probe = world.contacts.clone();
+                    let mut list = HVec::new();
+                    let plan = plan_relocation(probe.as_mut_slice(), C, &world.bodies, &mut list);
+                    update_parts(&mut single, &world.bodies, &mut r1);
+                    update_parts_in_two_passes(&mut twice, &world.bodies, &mut r2);
+                    let same = |x: &[Contact], y: &[Contact]| {
+                        x.len() == y.len() && x.iter().zip(y).all(|(a, b)| a.same_as(b))
+                    };
+                    assert!(same(&single, &twice), "step {}", world.step_count());
+                    assert_eq!(r1.dropped_contacts, r2.dropped_contacts);
+                    if !same(&twice, &world.contacts) {
+                        changed += 1;
+                        if plan.is_some() {
+                            planned += 1;
+                        } else {
+                            fallback += 1;
+                        }
+                    }
+                    world.step();
                 }
-                for scene in [Scene::Terrain, Scene::TerrainMesh] {
-                    let mut world: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
-                    world.set_config(scene.config()).unwrap();
-                    scene
-                        .build_on(&mut world, &hulls, shapes.ground(scene))
-                        .unwrap();
-                    let (changed, planned, fallback) = compare(&mut world, 300);
-                    assert!(
-                        changed > 50,
-                        "{scene:?}: {changed} updates changed anything"
-                    );
-                    assert!(
-                        planned * 10 >= changed * 9,
-                        "{scene:?}: {planned} of {changed}"
-                    );
-                    std::println!(
-                        "{scene:?}: {changed} changed, {planned} planned, {fallback} not"
-                    );
-                }
-                // A buffer the pile fills: some updates do not fit the plan.
-                let mut small: std::boxed::Box<crate::World<'_, 128, 200, 64>> =
-                    std::boxed::Box::default();
-                small.set_config(Scene::Terrain.config()).unwrap();
-                Scene::Terrain
-                    .build_on(&mut small, &hulls, shapes.ground(Scene::Terrain))
+                (changed, planned, fallback)
+            }
+            for scene in [Scene::Terrain, Scene::TerrainMesh] {
+                let mut world: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
+                world.set_config(scene.config()).unwrap();
+                scene
+                    .build_on(&mut world, &hulls, shapes.ground(scene))
                     .unwrap();
-                let (changed, _, fallback) = compare(&mut small, 300);
-                std::println!("small: {changed} changed, {fallback} not planned");
-                assert!(fallback > 0, "the full buffer never fell back");
-            })
-            .unwrap()
-            .join()
-            .unwrap();
+                let (changed, planned, fallback) = compare(&mut world, 300);
+                assert!(
+                    changed > 50,
+                    "{scene:?}: {changed} updates changed anything"
+                );
+                assert!(
+                    planned * 10 >= changed * 9,
+                    "{scene:?}: {planned} of {changed}"
+                );
+                std::println!("{scene:?}: {changed} changed, {planned} planned, {fallback} not");
+            }
+            // A buffer the pile fills: some updates do not fit the plan.
+            let mut small: std::boxed::Box<crate::World<'_, 128, 200, 64>> =
+                std::boxed::Box::default();
+            small.set_config(Scene::Terrain.config()).unwrap();
+            Scene::Terrain
+                .build_on(&mut small, &hulls, shapes.ground(Scene::Terrain))
+                .unwrap();
+            let (changed, _, fallback) = compare(&mut small, 300);
+            std::println!("small: {changed} changed, {fallback} not planned");
+            assert!(fallback > 0, "the full buffer never fell back");
+        });
     }
 
     /// `beyond_reach` against the exact queries: whenever it skips a part pair, the
