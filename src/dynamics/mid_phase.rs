@@ -1184,7 +1184,7 @@ mod tests {
                 let mut world: std::boxed::Box<ReferenceWorld<'_>> = std::boxed::Box::default();
                 world.set_config(scene.config()).unwrap();
                 scene
-                    .build_on(&mut world, &hulls, shapes.ground(scene))
+                    .build_on(&mut world, hulls, shapes.ground(scene))
                     .unwrap();
                 let (changed, planned, fallback) = compare(&mut world, 300);
                 assert!(
@@ -1202,7 +1202,7 @@ mod tests {
                 std::boxed::Box::default();
             small.set_config(Scene::Terrain.config()).unwrap();
             Scene::Terrain
-                .build_on(&mut small, &hulls, shapes.ground(Scene::Terrain))
+                .build_on(&mut small, hulls, shapes.ground(Scene::Terrain))
                 .unwrap();
             let (changed, _, fallback) = compare(&mut small, 300);
             std::println!("small: {changed} changed, {fallback} not planned");
