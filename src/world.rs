@@ -195,11 +195,7 @@ impl<'a, const BODIES: usize, const CONTACTS: usize, const EVENTS: usize>
         contact::insert_pairs(contacts, pairs, bodies, &cfg, &mut report);
         self.stage_done(&mut hooks, Stage::BroadPhase);
         // 4 mid phase: the part pairs of meshes and compounds that may touch
-        let dropped = report.dropped_contacts;
-        if mid_phase::update_parts(&mut self.contacts, &self.bodies, &mut report) {
-            let whole = report.dropped_contacts == dropped;
-            mid_phase::lists_placed(&mut self.bodies, whole);
-        }
+        mid_phase::update_parts(&mut self.contacts, &mut self.bodies, &mut report);
         // 5 narrow phase, 6 contact cache: manifolds reused or rebuilt, warm-started
         let events = &mut self.events;
         contact::update_contacts(

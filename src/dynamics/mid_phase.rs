@@ -246,17 +246,17 @@ pub(crate) fn candidates(a: &Body<'_>, b: &Body<'_>, out: &mut HVec<u32, MAX_PAI
 /// ([`plan_relocation`], then [`relocate`]); a step with more new part contacts or
 /// more runs of contacts moving up than the plan holds, or with more new part contacts
 /// than the buffer has room for, takes [`update_parts_in_two_passes`] instead (the
-/// same result).
+/// same result). Then the bodies' `relist` flags ([`lists_placed`]).
 pub(crate) fn update_parts<const N: usize, const C: usize>(
     contacts: &mut HVec<Contact, C>,
-    bodies: &Pool<Body<'_>, N>,
+    bodies: &mut Pool<Body<'_>, N>,
     report: &mut StepReport,
-) -> bool {
-    let any = contacts.iter().any(Contact::is_record);
-    if any {
+) {
+    if contacts.iter().any(Contact::is_record) {
+        let dropped = report.dropped_contacts;
         update_part_contacts(contacts, bodies, report);
+        lists_placed(bodies, report.dropped_contacts == dropped);
     }
-    any
 }
 
 /// [`update_parts`] for a buffer with a pair record. Kept out of line: its plan and list
@@ -572,7 +572,7 @@ fn list_kept(a: &Body<'_>, b: &Body<'_>) -> bool {
 /// After stage 4 ([`update_parts`]): with every list placed whole (`whole`: nothing
 /// dropped), each body's part lists are as its box gives them, and its `relist` flag
 /// is cleared; otherwise every flag stays, and every list is formed again next step.
-pub(crate) fn lists_placed<const N: usize>(bodies: &mut Pool<Body<'_>, N>, whole: bool) {
+fn lists_placed<const N: usize>(bodies: &mut Pool<Body<'_>, N>, whole: bool) {
     if whole {
         for (_, b) in bodies.iter_mut() {
             b.relist = false;
@@ -1161,7 +1161,7 @@ mod tests {
                     let mut probe = world.contacts.clone();
                     let mut list = HVec::new();
                     let plan = plan_relocation(probe.as_mut_slice(), C, &world.bodies, &mut list);
-                    update_parts(&mut single, &world.bodies, &mut r1);
+                    update_part_contacts(&mut single, &world.bodies, &mut r1);
                     update_parts_in_two_passes(&mut twice, &world.bodies, &mut r2);
                     let same = |x: &[Contact], y: &[Contact]| {
                         x.len() == y.len() && x.iter().zip(y).all(|(a, b)| a.same_as(b))
