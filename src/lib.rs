@@ -159,7 +159,7 @@
 //!   stay zero.
 //! - `EVENTS`: events per step; more are counted in [`StepReport::dropped_events`].
 //!
-//! Memory is a fixed part (under 6 KiB) plus, on 64-bit hosts, **672 bytes per body
+//! Memory is a fixed part (under 6 KiB) plus, on 64-bit hosts, **680 bytes per body
 //! slot** and **1113 bytes per contact slot**: a `World<128, 512>` is about 0.66 MB, a
 //! `World<1024, 8192>` about 9.8 MB. [`World::max_snapshot_len`] gives the snapshot
 //! buffer a world type can need. A big world belongs in a `static` (`World::new` is a

@@ -18,7 +18,7 @@ use crate::shape::Shape;
 /// A physics world with room for `BODIES` bodies, `CONTACTS` contacts (manifolds, and as
 /// many candidate pairs per step) and `EVENTS` events per step.
 ///
-/// Everything lives inline: no heap. A world is large (672 bytes per body slot and 1113
+/// Everything lives inline: no heap. A world is large (680 bytes per body slot and 1113
 /// per contact slot on 64-bit hosts, README "Capacity"), so where it lives matters:
 ///
 /// - In a `static`: `World::new` is a `const fn`, so the compiler builds the world and

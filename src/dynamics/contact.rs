@@ -553,10 +553,12 @@ pub(crate) fn update_contacts<const N: usize, const C: usize, const E: usize>(
     report: &mut StepReport,
 ) {
     // The broad phase formed the bounds of the bodies it moves (`update_fat_boxes`).
+    // Every body's spin reach, for the pairs' closing bounds (`closing_bound`).
     for (_, body) in bodies.iter_mut() {
         if body.kind == BodyKind::Static || !body.awake {
             body.refresh_bounds();
         }
+        body.refresh_spin_reach();
     }
     let bodies = &*bodies;
     let mut write = 0usize;
@@ -787,12 +789,12 @@ fn update_one<const N: usize>(
 /// The fastest the surfaces of `a` and `b` can close (m/s): `|v_b − v_a| + |ω_a| ρ_a +
 /// |ω_b| ρ_b`, with `ρ` how far a body's core reaches from its centre of mass
 /// (`Body::turn_reach`). Turning about the centre of mass moves no surface point faster
-/// than `|ω| ρ`: a ball turning about its centre closes on nothing.
+/// than `|ω| ρ`: a ball turning about its centre closes on nothing. Each body's `|ω| ρ`
+/// is its `Body::spin_reach`, formed once per step for every body at the start of the
+/// narrow phase.
 #[inline]
 fn closing_bound(a: &Body<'_>, b: &Body<'_>) -> f32 {
-    (b.linear_velocity - a.linear_velocity).length()
-        + a.angular_velocity.length() * a.turn_reach
-        + b.angular_velocity.length() * b.turn_reach
+    (b.linear_velocity - a.linear_velocity).length() + a.spin_reach + b.spin_reach
 }
 
 /// Stage 5 for one pair, in place: reuse the manifold when the pair barely moved, else
@@ -2271,6 +2273,7 @@ mod tests {
                     rng.unit_vector() * rng.range(0.0, 5.0)
                 };
                 body.angular_velocity = rng.unit_vector() * rng.range(0.0, 30.0);
+                body.refresh_spin_reach();
             }
             let gap = |pa: &Iso, pb: &Iso| {
                 crate::collide::distance(&sa, pa, &sb, pb, &mut Default::default())
